@@ -1,0 +1,51 @@
+//! Triangle meshes and the [`Plant`] that the renderer consumes.
+
+/// An indexed triangle mesh. All per-vertex arrays have the same length.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Mesh {
+    /// Positions in metres.
+    pub positions: Vec<[f32; 3]>,
+    /// Unit normals. For leaves: the normal of the front face (leaves are drawn two-sided).
+    pub normals: Vec<[f32; 3]>,
+    /// Texture coordinates; for leaves they index [`Plant::leaf_texture`].
+    pub uvs: Vec<[f32; 2]>,
+    /// Linear RGB base colour per vertex (multiplies the texture for leaves).
+    pub colors: Vec<[f32; 3]>,
+    /// Triangle list, counter-clockwise front faces.
+    pub indices: Vec<u32>,
+}
+
+impl Mesh {
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+}
+
+/// An RGBA8 leaf texture: sRGB colour, straight (not premultiplied) alpha used as a cut-out mask.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LeafTexture {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `width * height * 4` bytes, rows top to bottom.
+    pub rgba: Vec<u8>,
+}
+
+/// A plant ready to draw: wood and leaf meshes in metres, Y up, trunk base at the origin.
+#[derive(Debug, Clone)]
+pub struct Plant {
+    /// Human-readable name (preset name or file stem).
+    pub name: String,
+    /// Branches and trunk (opaque).
+    pub wood: Mesh,
+    /// Leaves or needles (alpha-tested with `leaf_texture`, two-sided).
+    pub leaves: Mesh,
+    /// The leaf cut-out texture.
+    pub leaf_texture: LeafTexture,
+    /// Bounding box of wood and leaves, metres.
+    pub bbox_min: [f32; 3],
+    /// Bounding box of wood and leaves, metres.
+    pub bbox_max: [f32; 3],
+}

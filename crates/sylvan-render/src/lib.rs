@@ -1,0 +1,1 @@
+//! sylvan-render

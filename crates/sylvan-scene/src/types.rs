@@ -1,0 +1,121 @@
+//! The scene's data types. Units metres, world Y up, right-handed; the terrain covers
+//! X ∈ [0, size_x], Z ∈ [0, size_z].
+
+use glam::Vec3;
+use std::path::PathBuf;
+
+/// A whole scene: everything a frame needs except the plants' geometry.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// The ground.
+    pub terrain: Terrain,
+    /// Species, indexed by [`TreeInstance::species`].
+    pub species: Vec<Species>,
+    /// Every tree, placed on the terrain.
+    pub trees: Vec<TreeInstance>,
+    /// The sun.
+    pub sun: Sun,
+    /// Sky and ambient colours.
+    pub sky: Sky,
+    /// Distance fog.
+    pub fog: Fog,
+    /// The default camera.
+    pub camera: Camera,
+    /// The `[lod] chain` entries as written (e.g. `"geometry:0-60"`); empty when absent.
+    pub lod_chain: Vec<String>,
+    /// The file the scene came from (`None` for the built-in scene).
+    pub source: Option<PathBuf>,
+}
+
+/// A regular height grid over X ∈ [0, size[0]], Z ∈ [0, size[1]].
+#[derive(Debug, Clone)]
+pub struct Terrain {
+    /// Extent in metres along X and Z.
+    pub size: [f32; 2],
+    /// Samples along X (columns) and Z (rows), each ≥ 2.
+    pub resolution: [u32; 2],
+    /// Heights in metres, row-major: `heights[row * resolution[0] + col]`, row 0 at Z = 0,
+    /// column 0 at X = 0.
+    pub heights: Vec<f32>,
+}
+
+/// Where a species' plant comes from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum PlantSource {
+    /// A built-in preset by name (`pine`, `prunus`, `bush`).
+    Preset(String),
+    /// A `.lsys`, `.glb`, `.gltf` or `.obj` file (already resolved against the scene's folder).
+    File(PathBuf),
+}
+
+/// One kind of tree.
+#[derive(Debug, Clone)]
+pub struct Species {
+    /// Name from the scene file.
+    pub name: String,
+    /// The plant model.
+    pub plant: PlantSource,
+    /// Each tree is scaled to a height in this range (metres).
+    pub height_m: [f32; 2],
+}
+
+/// One placed tree.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TreeInstance {
+    /// Trunk base, on the terrain surface (metres).
+    pub position: Vec3,
+    /// Target height in metres (the plant is scaled uniformly to it).
+    pub height: f32,
+    /// Rotation about +Y in radians.
+    pub rotation: f32,
+    /// Index into [`Scene::species`].
+    pub species: u32,
+}
+
+/// The sun. Azimuth is measured from +Z towards +X; elevation above the horizon; degrees.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sun {
+    /// Degrees from +Z towards +X.
+    pub azimuth_deg: f32,
+    /// Degrees above the horizon.
+    pub elevation_deg: f32,
+    /// Linear RGB irradiance colour (scaled so a surface facing the sun gets ~ this value).
+    pub color: [f32; 3],
+}
+
+/// Sky and ambient light (linear RGB).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sky {
+    /// Colour at the zenith.
+    pub zenith: [f32; 3],
+    /// Colour at the horizon (also the fog colour).
+    pub horizon: [f32; 3],
+    /// Light bounced from the ground (lower hemisphere of the ambient term).
+    pub ground: [f32; 3],
+}
+
+/// Exponential distance fog.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fog {
+    /// Distance in metres at which half the colour is fog (0 disables fog).
+    pub half_distance_m: f32,
+}
+
+/// A perspective camera.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    /// Eye position (metres).
+    pub position: Vec3,
+    /// Point looked at (metres).
+    pub look_at: Vec3,
+    /// Vertical field of view in degrees.
+    pub fov_deg: f32,
+}
+
+impl Sun {
+    /// Unit vector from the ground towards the sun.
+    pub fn direction(&self) -> Vec3 {
+        let (az, el) = (self.azimuth_deg.to_radians(), self.elevation_deg.to_radians());
+        Vec3::new(el.cos() * az.sin(), el.sin(), el.cos() * az.cos())
+    }
+}
