@@ -1,1 +1,62 @@
-fn main() {}
+//! The `sylvan` command line: `plant`, `bake`, `render`, `bench`, `compare`.
+//!
+//! The binary is thin: each subcommand parses its flags into a validated configuration and calls
+//! the libraries. Errors print once, on one line, as `error: FILE:LINE:COL: what — fix` where a
+//! location applies, and the exit status is non-zero.
+
+mod cmd;
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+/// Real-time forest rendering with image-based tree representations.
+#[derive(Parser)]
+#[command(name = "sylvan", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Build a plant from an L-system, a preset or a mesh; print stats or export .glb.
+    Plant(cmd::plant::PlantArgs),
+    /// Compare two images: FLIP, SSIM, PSNR.
+    Compare(cmd::compare::CompareArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            // --help / --version are not errors.
+            let code = if e.use_stderr() { 2 } else { 0 };
+            let _ = e.print();
+            return ExitCode::from(code);
+        }
+    };
+    let result = match cli.command {
+        Command::Plant(args) => cmd::plant::run(args),
+        Command::Compare(args) => cmd::compare::run(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {}", one_line(&e));
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// The error and its causes on one line, without repeating a cause already in the message.
+fn one_line(e: &anyhow::Error) -> String {
+    let mut out = e.to_string();
+    for cause in e.chain().skip(1) {
+        let c = cause.to_string();
+        if !out.contains(&c) {
+            out.push_str(": ");
+            out.push_str(&c);
+        }
+    }
+    out.replace('\n', " ")
+}

@@ -1,0 +1,4 @@
+//! One module per subcommand: flags → validated config → library calls.
+
+pub mod compare;
+pub mod plant;
