@@ -23,7 +23,7 @@ impl Mesh {
 }
 
 /// An RGBA8 leaf texture: sRGB colour, straight (not premultiplied) alpha used as a cut-out mask.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct LeafTexture {
     /// Width in pixels.
     pub width: u32,
@@ -34,7 +34,12 @@ pub struct LeafTexture {
 }
 
 /// A plant ready to draw: wood and leaf meshes in metres, Y up, trunk base at the origin.
-#[derive(Debug, Clone)]
+///
+/// Besides the meshes it carries the branch hierarchy with bounding boxes (LCV04 §3, read by
+/// the box-tree technique) and the instancing view (MNP01 §3.2, read by hierarchical
+/// billboards). Construct with [`crate::preset`], [`crate::load`] or
+/// [`crate::from_lsystem`]; `..Default::default()` fills the optional parts in tests.
+#[derive(Debug, Clone, Default)]
 pub struct Plant {
     /// Human-readable name (preset name or file stem).
     pub name: String,
@@ -48,4 +53,12 @@ pub struct Plant {
     pub bbox_min: [f32; 3],
     /// Bounding box of wood and leaves, metres.
     pub bbox_max: [f32; 3],
+    /// Branch tree with a bounding box per branch (LCV04 §3.1, §3.2.1); node 0 is the root.
+    pub hierarchy: crate::Hierarchy,
+    /// Base objects and instances (MNP01 §3.2): the plant stored once per distinct part.
+    pub instancing: crate::Instancing,
+    /// Drawn internodes (`F` segments); 0 for imported meshes.
+    pub internodes: usize,
+    /// Number of leaves (leaf quads / needle tufts, or leaf pieces of an imported mesh).
+    pub leaf_count: usize,
 }

@@ -1,1 +1,31 @@
-//! sylvan-render
+//! Sylvan's frame renderer: terrain, sky, cascaded sun shadows, distance fog, and the tree
+//! representations of `technique/` behind one trait.
+//!
+//! ```no_run
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let gpu = sylvan_gpu::Gpu::new()?;
+//! let scene = sylvan_scene::Scene::builtin_default();
+//! let plants = sylvan_render::load_plants(&scene)?;
+//! let options = sylvan_render::RenderOptions { width: 640, height: 360, ..Default::default() };
+//! let mut renderer = sylvan_render::Renderer::new(&gpu, &scene, &plants, &options)?;
+//! let stats = renderer.render(&gpu, &scene.camera, &scene.sun)?;
+//! let image = renderer.read_image(&gpu)?;
+//! # Ok(()) }
+//! ```
+//!
+//! Conventions: metres, Y up, right-handed; linear HDR in the main pass (reversed-Z depth),
+//! tone-mapped to sRGB in the resolve.
+
+mod error;
+pub mod frame;
+pub mod instances;
+pub mod pipeline;
+mod renderer;
+mod sky;
+pub mod technique;
+mod terrain;
+pub mod texture;
+
+pub use error::RenderError;
+pub use renderer::{FrameStats, RenderOptions, Renderer, load_plants};
+pub use technique::TechniqueKind;

@@ -27,7 +27,7 @@ pub struct Scene {
     pub source: Option<PathBuf>,
 }
 
-/// A regular height grid over X ∈ [0, size[0]], Z ∈ [0, size[1]].
+/// A regular height grid over X ∈ `[0, size[0]]`, Z ∈ `[0, size[1]]`.
 #[derive(Debug, Clone)]
 pub struct Terrain {
     /// Extent in metres along X and Z.
@@ -115,7 +115,10 @@ pub struct Camera {
 impl Sun {
     /// Unit vector from the ground towards the sun.
     pub fn direction(&self) -> Vec3 {
-        let (az, el) = (self.azimuth_deg.to_radians(), self.elevation_deg.to_radians());
+        let (az, el) = (
+            self.azimuth_deg.to_radians(),
+            self.elevation_deg.to_radians(),
+        );
         Vec3::new(el.cos() * az.sin(), el.sin(), el.cos() * az.cos())
     }
 }

@@ -21,8 +21,14 @@ struct Cli {
 enum Command {
     /// Build a plant from an L-system, a preset or a mesh; print stats or export .glb.
     Plant(cmd::plant::PlantArgs),
+    /// Render one frame of a scene to a PNG.
+    Render(cmd::render::RenderArgs),
+    /// Time N frames of a scene with one technique; print JSON.
+    Bench(cmd::bench::BenchArgs),
     /// Compare two images: FLIP, SSIM, PSNR.
     Compare(cmd::compare::CompareArgs),
+    /// Print the GPU adapter Sylvan would use; fails with an install hint when there is none.
+    Adapter,
 }
 
 fn main() -> ExitCode {
@@ -37,7 +43,17 @@ fn main() -> ExitCode {
     };
     let result = match cli.command {
         Command::Plant(args) => cmd::plant::run(args),
+        Command::Render(args) => cmd::render::run(args),
+        Command::Bench(args) => cmd::bench::run(args),
         Command::Compare(args) => cmd::compare::run(args),
+        Command::Adapter => sylvan_gpu::Gpu::new().map_err(Into::into).map(|gpu| {
+            let ts = if gpu.timestamps {
+                "GPU timestamps"
+            } else {
+                "wall-clock timer"
+            };
+            println!("{} — {ts}", gpu.adapter_label());
+        }),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,4 +1,8 @@
 //! One module per subcommand: flags → validated config → library calls.
 
+pub mod bench;
+pub mod common;
 pub mod compare;
 pub mod plant;
+pub mod render;
+pub mod stats;

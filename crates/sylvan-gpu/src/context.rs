@@ -1,0 +1,184 @@
+//! Device creation on whatever adapter exists, and error capture instead of panics.
+
+use std::sync::{Arc, Mutex};
+
+/// What to install when no adapter exists (Debian package names).
+pub const INSTALL_HINT: &str = "install Mesa's software Vulkan driver with `sudo apt-get install -y \
+mesa-vulkan-drivers libvulkan1` (GL fallback: `libegl1 libegl-mesa0 libgl1-mesa-dri`), or run \
+`cargo xtask test` / `cargo xtask demo`, which install it for you";
+
+/// Errors from device creation and GPU work.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum GpuError {
+    /// No adapter on any backend.
+    #[error("no GPU adapter found (tried {backends}) — {INSTALL_HINT}")]
+    NoAdapter {
+        /// The backends that were tried.
+        backends: String,
+    },
+    /// The adapter refused the device request.
+    #[error(
+        "could not open a device on '{adapter}': {reason} — try another backend with WGPU_BACKEND=vulkan|gl"
+    )]
+    Device {
+        /// Adapter name.
+        adapter: String,
+        /// wgpu's reason.
+        reason: String,
+    },
+    /// A request exceeds what the device allows.
+    #[error("{what} needs {needed} but this device allows at most {limit} — {fix}")]
+    Limit {
+        /// What was asked for.
+        what: String,
+        /// How much was needed.
+        needed: u64,
+        /// The device limit.
+        limit: u64,
+        /// What to do instead.
+        fix: String,
+    },
+    /// wgpu reported a validation or out-of-memory error.
+    #[error("GPU error: {0}")]
+    Wgpu(String),
+}
+
+/// A headless wgpu device and queue, plus what Sylvan needs to know about the adapter.
+pub struct Gpu {
+    /// The wgpu instance (kept for surfaces in the viewer).
+    pub instance: wgpu::Instance,
+    /// The adapter in use.
+    pub adapter: wgpu::Adapter,
+    /// The device.
+    pub device: wgpu::Device,
+    /// The queue.
+    pub queue: wgpu::Queue,
+    /// Adapter name, driver and backend.
+    pub info: wgpu::AdapterInfo,
+    /// Whether GPU timestamp queries (inside encoders) are available.
+    pub timestamps: bool,
+    errors: Arc<Mutex<Vec<String>>>,
+}
+
+impl Gpu {
+    /// Opens a device on the best adapter available (`WGPU_BACKEND` selects a backend).
+    pub fn new() -> Result<Self, GpuError> {
+        let desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        let backends = format!("{:?}", desc.backends);
+        let instance = wgpu::Instance::new(desc);
+        Self::with_instance(instance, None, backends)
+    }
+
+    /// Opens a device on an adapter compatible with `surface` (for windows), from `instance`.
+    pub fn with_instance(
+        instance: wgpu::Instance,
+        surface: Option<&wgpu::Surface<'_>>,
+        backends: String,
+    ) -> Result<Self, GpuError> {
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            force_fallback_adapter: false,
+            compatible_surface: surface,
+            apply_limit_buckets: false,
+        }))
+        .map_err(|_| GpuError::NoAdapter { backends })?;
+        let info = adapter.get_info();
+        let want =
+            wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
+        let timestamps = adapter.features().contains(want);
+        let features = if timestamps {
+            want
+        } else {
+            wgpu::Features::empty()
+        };
+        // Ask for the adapter's own limits: big atlases and storage buffers need them, and
+        // every allocation is checked against `device.limits()` first.
+        let limits = adapter.limits();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("sylvan"),
+            required_features: features,
+            required_limits: limits,
+            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            memory_hints: wgpu::MemoryHints::Performance,
+            trace: wgpu::Trace::Off,
+        }))
+        .map_err(|e| GpuError::Device {
+            adapter: info.name.clone(),
+            reason: e.to_string(),
+        })?;
+        let errors = Arc::new(Mutex::new(Vec::new()));
+        let sink = errors.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            if let Ok(mut v) = sink.lock() {
+                // wgpu's message spans several lines (error, then causes): keep it on one.
+                let text = e.to_string();
+                let parts: Vec<&str> = text
+                    .lines()
+                    .map(str::trim)
+                    .filter(|l| !l.is_empty())
+                    .collect();
+                v.push(parts.join(" "));
+            }
+        }));
+        Ok(Self {
+            instance,
+            adapter,
+            device,
+            queue,
+            info,
+            timestamps,
+            errors,
+        })
+    }
+
+    /// "name (backend, driver)" for stats output.
+    pub fn adapter_label(&self) -> String {
+        let driver = if self.info.driver.is_empty() {
+            String::new()
+        } else {
+            format!(", {}", self.info.driver)
+        };
+        format!("{} ({:?}{})", self.info.name, self.info.backend, driver)
+    }
+
+    /// Whether the adapter is a software rasteriser (lavapipe, llvmpipe).
+    pub fn is_software(&self) -> bool {
+        self.info.device_type == wgpu::DeviceType::Cpu
+    }
+
+    /// Blocks until all submitted work is done.
+    pub fn wait(&self) -> Result<(), GpuError> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| GpuError::Wgpu(e.to_string()))?;
+        self.check()
+    }
+
+    /// Returns the first GPU error captured since the last check, if any.
+    pub fn check(&self) -> Result<(), GpuError> {
+        let mut errors = self
+            .errors
+            .lock()
+            .map_err(|_| GpuError::Wgpu("error sink poisoned".into()))?;
+        match errors.drain(..).next() {
+            Some(e) => Err(GpuError::Wgpu(e)),
+            None => Ok(()),
+        }
+    }
+
+    /// Checks a 2D texture size against the device limit.
+    pub fn check_texture_size(&self, what: &str, width: u32, height: u32) -> Result<(), GpuError> {
+        let limit = self.device.limits().max_texture_dimension_2d;
+        let needed = width.max(height);
+        if needed > limit || width == 0 || height == 0 {
+            return Err(GpuError::Limit {
+                what: what.to_string(),
+                needed: needed as u64,
+                limit: limit as u64,
+                fix: "use a smaller --size or fewer samples (--spp)".into(),
+            });
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,198 @@
+//! The turtle's output before meshing: chains of points joined by internodes (generalised
+//! cylinders, ABOP §1.6 / §2.2) and leaf frames; and the meshing of both.
+//!
+//! A chain is a run of `F` along one branch; each point carries a ring of vertices, consecutive
+//! rings are joined by quads, and the radius changes along the chain with `!` (tapering). Ring
+//! frames are parallel-transported along the chain so that tubes do not twist when the turtle
+//! rolls. Branch tips are left open (they are thinner than a pixel at any useful distance).
+
+use crate::mesh::Mesh;
+use glam::Vec3;
+
+/// A point on a chain (generalised cylinder).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ChainPoint {
+    /// Position, metres.
+    pub pos: Vec3,
+    /// Unit tangent of the chain here.
+    pub heading: Vec3,
+    /// A unit vector across the chain (the turtle's left), used at chain starts.
+    pub side: Vec3,
+    /// Radius, metres.
+    pub radius: f32,
+    /// Colour index (`'`).
+    pub color: u8,
+    /// Ring vertex count (3..=8), fixed per chain.
+    pub sides: u8,
+    /// Distance along the chain, metres (texture v).
+    pub v: f32,
+    /// Previous point of the chain, or `u32::MAX` at a chain start.
+    pub prev: u32,
+}
+
+/// A leaf: a quad from `pos` along `heading`, across `side`, facing `normal`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LeafFrame {
+    /// Base of the leaf (petiole end), metres.
+    pub pos: Vec3,
+    /// Along the midrib.
+    pub heading: Vec3,
+    /// Across the blade.
+    pub side: Vec3,
+    /// Front-face normal.
+    pub normal: Vec3,
+    /// Length of the quad, metres.
+    pub size: f32,
+    /// Colour index (`'`).
+    pub color: u8,
+}
+
+/// Chains and leaves, in string order.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Skeleton {
+    /// Chain points.
+    pub points: Vec<ChainPoint>,
+    /// Internodes as (from, to) point indices, in string order.
+    pub segments: Vec<[u32; 2]>,
+    /// Leaves, in string order.
+    pub leaves: Vec<LeafFrame>,
+}
+
+/// Width/length ratio of leaf quads per leaf kind.
+pub fn leaf_aspect(kind: crate::lsystem::LeafKind) -> f32 {
+    match kind {
+        crate::lsystem::LeafKind::Broadleaf => 0.55,
+        crate::lsystem::LeafKind::Needles => 0.9,
+    }
+}
+
+/// Linear-RGB bark colours by colour index.
+pub const WOOD_PALETTE: [[f32; 3]; 6] = [
+    [0.100, 0.066, 0.042], // 0 brown bark
+    [0.085, 0.072, 0.060], // 1 grey-brown bark (prunus)
+    [0.150, 0.072, 0.038], // 2 red-brown pine bark
+    [0.120, 0.100, 0.048], // 3 young shoot
+    [0.050, 0.036, 0.026], // 4 dark bark
+    [0.180, 0.150, 0.110], // 5 pale bark
+];
+
+/// Linear-RGB leaf tints by colour index (they multiply the leaf texture).
+pub const LEAF_PALETTE: [[f32; 3]; 4] = [
+    [1.00, 1.00, 1.00], // 0 as textured
+    [0.80, 0.92, 0.70], // 1 fresh, lighter
+    [1.10, 0.95, 0.55], // 2 yellowing
+    [0.70, 0.78, 0.72], // 3 shaded, darker
+];
+
+fn palette(p: &[[f32; 3]], i: u8) -> [f32; 3] {
+    p[i as usize % p.len()]
+}
+
+impl Skeleton {
+    /// Triangles the wood mesh will have (checked against limits before meshing).
+    pub fn wood_triangles(&self) -> usize {
+        self.segments
+            .iter()
+            .map(|s| 2 * self.points[s[1] as usize].sides as usize)
+            .sum()
+    }
+
+    /// Meshes the chains: a ring per point, quads between consecutive rings. Returns the mesh
+    /// and, per segment, the offset of its first index (so callers can map segment ranges to
+    /// index ranges).
+    pub fn mesh_wood(&self) -> (Mesh, Vec<u32>) {
+        let mut m = Mesh::default();
+        let nverts: usize = self.points.iter().map(|p| p.sides as usize + 1).sum();
+        m.positions.reserve(nverts);
+        m.normals.reserve(nverts);
+        m.uvs.reserve(nverts);
+        m.colors.reserve(nverts);
+        m.indices.reserve(self.wood_triangles() * 3);
+        // Ring frame per point, parallel-transported from the chain start.
+        let mut first = vec![0u32; self.points.len()];
+        let mut axis = vec![Vec3::X; self.points.len()];
+        for (i, p) in self.points.iter().enumerate() {
+            let x = if p.prev == u32::MAX {
+                p.side
+            } else {
+                axis[p.prev as usize]
+            };
+            let mut x = (x - p.heading * x.dot(p.heading)).normalize_or_zero();
+            if x == Vec3::ZERO {
+                x = p.heading.any_orthonormal_vector();
+            }
+            axis[i] = x;
+            let y = p.heading.cross(x);
+            first[i] = m.positions.len() as u32;
+            let col = palette(&WOOD_PALETTE, p.color);
+            let n = p.sides as usize;
+            for k in 0..=n {
+                let a = k as f32 / n as f32 * std::f32::consts::TAU;
+                let dir = x * a.cos() + y * a.sin();
+                m.positions.push((p.pos + dir * p.radius).to_array());
+                m.normals.push(dir.to_array());
+                m.uvs.push([k as f32 / n as f32, p.v]);
+                m.colors.push(col);
+            }
+        }
+        let mut seg_first = Vec::with_capacity(self.segments.len() + 1);
+        for s in &self.segments {
+            seg_first.push(m.indices.len() as u32);
+            let (a, b) = (first[s[0] as usize], first[s[1] as usize]);
+            let n = self.points[s[1] as usize].sides as u32;
+            for k in 0..n {
+                // Counter-clockwise seen from outside: the ring runs x → y = heading × x.
+                let (a0, a1, b0, b1) = (a + k, a + k + 1, b + k, b + k + 1);
+                m.indices.extend_from_slice(&[a0, a1, b1, a0, b1, b0]);
+            }
+        }
+        seg_first.push(m.indices.len() as u32);
+        (m, seg_first)
+    }
+}
+
+/// Meshes leaves as quads (4 vertices, 2 triangles each, in leaf order): leaf `i` owns
+/// vertices `4i..4i+4` and indices `6i..6i+6`. UV v runs from 1 at the base to 0 at the tip.
+pub fn mesh_leaves(leaves: &[LeafFrame], aspect: f32, tint_seed: u64) -> Mesh {
+    let mut m = Mesh::default();
+    m.positions.reserve(leaves.len() * 4);
+    m.normals.reserve(leaves.len() * 4);
+    m.uvs.reserve(leaves.len() * 4);
+    m.colors.reserve(leaves.len() * 4);
+    m.indices.reserve(leaves.len() * 6);
+    for (i, l) in leaves.iter().enumerate() {
+        let half = l.side * (l.size * aspect * 0.5);
+        let tip = l.heading * l.size;
+        let base = m.positions.len() as u32;
+        let corners = [
+            l.pos - half,
+            l.pos + half,
+            l.pos + half + tip,
+            l.pos - half + tip,
+        ];
+        let uvs = [[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]];
+        let t = palette(&LEAF_PALETTE, l.color);
+        let k = 0.88
+            + 0.24 * crate::rng::hash01(tint_seed ^ (i as u64).wrapping_mul(0x9e37_79b9)) as f32;
+        let col = [t[0] * k, t[1] * k, t[2] * k];
+        // Order the corners so that the front face (counter-clockwise) faces `normal`.
+        let ccw = (corners[1] - corners[0])
+            .cross(corners[2] - corners[0])
+            .dot(l.normal)
+            >= 0.0;
+        for (c, uv) in corners.iter().zip(uvs) {
+            m.positions.push(c.to_array());
+            m.normals.push(l.normal.to_array());
+            m.uvs.push(uv);
+            m.colors.push(col);
+        }
+        if ccw {
+            m.indices
+                .extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+        } else {
+            m.indices
+                .extend_from_slice(&[base, base + 2, base + 1, base, base + 3, base + 2]);
+        }
+    }
+    m
+}

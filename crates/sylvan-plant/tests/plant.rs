@@ -1,0 +1,289 @@
+//! Library integration tests: presets, hierarchy (LCV04 §3.2.1), instancing (MNP01), errors,
+//! limits, import/export round trips.
+
+#![allow(clippy::needless_range_loop)]
+
+use std::time::Instant;
+use sylvan_plant::{LSystem, Plant, PlantError, from_lsystem, preset};
+
+fn err(src: &str) -> String {
+    match LSystem::parse(src, "bad.lsys").and_then(|ls| from_lsystem(&ls, "bad")) {
+        Ok(_) => panic!("expected an error for {src:?}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn presets_are_trees() {
+    for (name, min_h, max_tris) in [
+        ("pine", 14.0, 60_000),
+        ("prunus", 6.0, 60_000),
+        ("bush", 1.0, 40_000),
+    ] {
+        let t = Instant::now();
+        let p = preset(name).unwrap();
+        let s = p.stats();
+        eprintln!("{name}: {s:?} in {:?}", t.elapsed());
+        let h = p.bbox_max[1] - p.bbox_min[1];
+        let w = (p.bbox_max[0] - p.bbox_min[0]).max(p.bbox_max[2] - p.bbox_min[2]);
+        assert!(h > min_h, "{name} height {h}");
+        assert!(p.bbox_min[1] > -0.05, "{name} is above ground");
+        assert!(
+            s.triangles < max_tris && s.triangles > 5_000,
+            "{name}: {} triangles",
+            s.triangles
+        );
+        assert!(s.leaves > 1000, "{name}: {} leaves", s.leaves);
+        assert!(s.levels >= 3, "{name}: {} levels", s.levels);
+        assert_eq!(
+            p.leaf_texture.rgba.len(),
+            (p.leaf_texture.width * p.leaf_texture.height * 4) as usize
+        );
+        for m in [&p.wood, &p.leaves] {
+            let n = m.positions.len();
+            assert!(m.normals.len() == n && m.uvs.len() == n && m.colors.len() == n);
+            assert!(m.indices.iter().all(|&i| (i as usize) < n));
+        }
+        match name {
+            "bush" => assert!(w > h, "bush is wider than tall"),
+            "prunus" => assert!(w > 0.7 * h, "prunus has a broad crown"),
+            _ => assert!(h > 1.3 * w, "pine is conical"),
+        }
+    }
+    assert!(matches!(preset("oak"), Err(PlantError::UnknownPreset(_))));
+}
+
+#[test]
+fn pine_instancing_is_ten_times_smaller() {
+    let p = preset("pine").unwrap();
+    let s = p.stats();
+    eprintln!(
+        "pine: instanced {} B, flattened {} B, {} instances of {} objects, {} levels",
+        s.instanced_bytes, s.flattened_bytes, s.instances, s.base_objects, s.instance_levels
+    );
+    assert!(s.flattened_bytes >= 10 * s.instanced_bytes);
+    // MNP01's levels: needle tuft → bough → main branch → tree.
+    assert!(s.instance_levels >= 4);
+    // Expanding the instances gives the flattened plant back.
+    let (wood, leaves) = p.instancing.flatten();
+    assert_eq!(wood.positions.len(), p.wood.positions.len());
+    assert_eq!(leaves.triangle_count(), p.leaves.triangle_count());
+    let bb = |m: &sylvan_plant::Mesh| {
+        let mut lo = [f32::MAX; 3];
+        let mut hi = [f32::MIN; 3];
+        for q in &m.positions {
+            for k in 0..3 {
+                lo[k] = lo[k].min(q[k]);
+                hi[k] = hi[k].max(q[k]);
+            }
+        }
+        (lo, hi)
+    };
+    let (a, b) = (bb(&wood), bb(&p.wood));
+    for k in 0..3 {
+        assert!(
+            (a.0[k] - b.0[k]).abs() < 1e-3 && (a.1[k] - b.1[k]).abs() < 1e-3,
+            "{a:?} vs {b:?}"
+        );
+    }
+    let (a, b) = (bb(&leaves), bb(&p.leaves));
+    for k in 0..3 {
+        assert!(
+            (a.0[k] - b.0[k]).abs() < 1e-3 && (a.1[k] - b.1[k]).abs() < 1e-3,
+            "{a:?} vs {b:?}"
+        );
+    }
+}
+
+fn check_hierarchy(p: &Plant) {
+    let h = &p.hierarchy;
+    let root = &h.nodes[0];
+    assert!(root.parent.is_none());
+    assert_eq!(root.leaves, 0..p.leaf_count as u32);
+    for k in 0..3 {
+        // Boxes are conservative: internodes are bounded as spheres around their ends.
+        assert!(
+            root.bbox_min[k] <= p.bbox_min[k] + 1e-3 && root.bbox_max[k] >= p.bbox_max[k] - 1e-3
+        );
+        assert!(root.bbox_min[k] >= p.bbox_min[k] - 0.5 && root.bbox_max[k] <= p.bbox_max[k] + 0.5);
+    }
+    for (i, n) in h.nodes.iter().enumerate() {
+        for &c in &n.children {
+            let c = &h.nodes[c as usize];
+            assert_eq!(c.parent, Some(i as u32));
+            assert_eq!(c.level, n.level + 1);
+            assert!(c.leaves.start >= n.leaves.start && c.leaves.end <= n.leaves.end);
+            for k in 0..3 {
+                assert!(
+                    c.bbox_min[k] >= n.bbox_min[k] - 1e-4 && c.bbox_max[k] <= n.bbox_max[k] + 1e-4,
+                    "child box inside parent box"
+                );
+            }
+        }
+        assert_eq!(
+            n.leaf_indices.start,
+            h.leaf_first_index[n.leaves.start as usize]
+        );
+        // Every leaf of the subtree lies in the box.
+        for ix in &p.leaves.indices[n.leaf_indices.start as usize..n.leaf_indices.end as usize] {
+            let q = p.leaves.positions[*ix as usize];
+            for k in 0..3 {
+                assert!(q[k] >= n.bbox_min[k] - 1e-3 && q[k] <= n.bbox_max[k] + 1e-3);
+            }
+        }
+    }
+    let own: u32 = h.nodes.iter().map(|n| n.own_leaves).sum();
+    assert_eq!(own as usize, p.leaf_count);
+}
+
+#[test]
+fn hierarchy_boxes_nest() {
+    for name in ["pine", "prunus", "bush"] {
+        let p = preset(name).unwrap();
+        check_hierarchy(&p);
+    }
+    // LCV04 §3.2.1 on a tiny string: trunk with two branches, one with a sub-branch.
+    let ls = LSystem::parse(
+        "iterations: 0\nangle: 90\naxiom: F[+F[-F~]]F[-F~]F~\n",
+        "t.lsys",
+    )
+    .unwrap();
+    let p = from_lsystem(&ls, "t").unwrap();
+    assert_eq!(p.hierarchy.nodes.len(), 4);
+    assert_eq!(p.hierarchy.levels(), 3);
+    assert_eq!(p.hierarchy.nodes[0].own_leaves, 1);
+    check_hierarchy(&p);
+}
+
+#[test]
+fn errors_name_file_line_col() {
+    let cases = [
+        (
+            "iterations: 2\nangle: 20\naxiom: F\nF -> F[+F\n",
+            "bad.lsys:4:7: unbalanced '['",
+        ),
+        (
+            "iterations: 2\nangle: 20\naxiom: F\nF -> F]+F\n",
+            "bad.lsys:4:7: unbalanced ']'",
+        ),
+        (
+            "iterations: 2\nangle: 20\naxiom: F\nF -> F@F\n",
+            "bad.lsys:4:7: unknown symbol '@'",
+        ),
+        (
+            "iterations: 2\nangle: 20\naxiom: A(1)\nA(x) -> A(x*)\n",
+            "bad.lsys:4:13: expected a number",
+        ),
+        (
+            "iterations: 2\nangle: 20\naxiom: A(1)\nA(x) -> A(x/0)\n",
+            "bad.lsys:4:12: division by zero",
+        ),
+        (
+            "iterations: 2\nangle: 20\naxiom: A(0)\nA(x) -> A(1/x)\n",
+            "bad.lsys:4:12: division by zero",
+        ),
+        (
+            "iterations: 2\nangle: 20\nF -> FF\n",
+            "bad.lsys:1:1: missing axiom",
+        ),
+        (
+            "iterations: 2\nangle: 20\naxiom: A(1)\nA(x) -> A(y)\n",
+            "bad.lsys:4:11: unknown name 'y'",
+        ),
+        (
+            "iterations: 2\nangle: 20\naxiom: F\ncolour: red\n",
+            "bad.lsys:4:1: unknown header key 'colour'",
+        ),
+        (
+            "iterations: 2\nangle: 20\naxiom: F\nF -> F(sqrt(-1))\n",
+            "bad.lsys:4:8:",
+        ),
+    ];
+    for (src, want) in cases {
+        let e = err(src);
+        assert!(e.starts_with(want), "{e:?} should start with {want:?}");
+        assert!(e.contains(" — "), "{e:?} has a fix");
+        assert!(!e.contains('\n'));
+    }
+}
+
+#[test]
+fn explosion_stops_at_the_declared_limit() {
+    let t = Instant::now();
+    let e = err("iterations: 60\nangle: 20\nlimit: 100000\naxiom: F\nF -> FF\n");
+    assert!(
+        e.starts_with("bad.lsys:5:1: derivation exceeds the declared limit of 100000 modules"),
+        "{e}"
+    );
+    let e = err("iterations: 100\nangle: 20\naxiom: F\nF -> F[+F][-F]F\n");
+    assert!(e.contains("declared limit of 1000000"), "{e}");
+    assert!(
+        t.elapsed().as_secs() < 20,
+        "bounded time: {:?}",
+        t.elapsed()
+    );
+}
+
+#[test]
+fn export_and_reimport_round_trip() {
+    let dir = std::env::temp_dir().join(format!("sylvan-plant-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = preset("bush").unwrap();
+    let a = dir.join("bush.glb");
+    sylvan_plant::export::write_glb(&p, &a).unwrap();
+    let q = sylvan_plant::load(&a).unwrap();
+    assert_eq!(q.wood.triangle_count(), p.wood.triangle_count());
+    assert_eq!(q.leaves.triangle_count(), p.leaves.triangle_count());
+    assert_eq!(
+        (q.leaf_texture.width, q.leaf_texture.height),
+        (p.leaf_texture.width, p.leaf_texture.height)
+    );
+    assert_eq!(q.leaf_texture.rgba, p.leaf_texture.rgba);
+    for k in 0..3 {
+        assert!((q.bbox_max[k] - q.bbox_min[k] - (p.bbox_max[k] - p.bbox_min[k])).abs() < 1e-3);
+    }
+    assert!(q.hierarchy.levels() >= 2);
+    check_hierarchy(&q);
+    // Second round trip is stable.
+    let b = dir.join("bush2.glb");
+    sylvan_plant::export::write_glb(&q, &b).unwrap();
+    let r = sylvan_plant::load(&b).unwrap();
+    assert_eq!(r.wood.positions.len(), q.wood.positions.len());
+    for (a, b) in r.wood.positions.iter().zip(&q.wood.positions) {
+        for k in 0..3 {
+            assert!((a[k] - b[k]).abs() < 1e-5, "{a:?} vs {b:?}");
+        }
+    }
+    assert_eq!(r.leaves.indices, q.leaves.indices);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn malformed_meshes_are_clear_errors() {
+    let dir = std::env::temp_dir().join(format!("sylvan-plant-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let glb = dir.join("bad.glb");
+    std::fs::write(&glb, b"glTF\x02\0\0\0garbage").unwrap();
+    let e = sylvan_plant::load(&glb).unwrap_err().to_string();
+    assert!(e.contains("bad.glb: malformed glTF"), "{e}");
+    let gltf = dir.join("bad.gltf");
+    std::fs::write(&gltf, b"{\"asset\":{\"version\":\"2.0\"},\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":7}}]}]}").unwrap();
+    let e = sylvan_plant::load(&gltf).unwrap_err().to_string();
+    assert!(e.contains("bad.gltf: malformed glTF"), "{e}");
+    let obj = dir.join("bad.obj");
+    std::fs::write(&obj, "v 0 0 0\nv 1 0 0\nf 1 2 9\n").unwrap();
+    let e = sylvan_plant::load(&obj).unwrap_err().to_string();
+    assert!(
+        e.contains("bad.obj: malformed OBJ") || e.contains("out of range"),
+        "{e}"
+    );
+    let empty = dir.join("empty.obj");
+    std::fs::write(&empty, "# nothing\n").unwrap();
+    let e = sylvan_plant::load(&empty).unwrap_err().to_string();
+    assert!(e.contains("no triangles"), "{e}");
+    let e = sylvan_plant::load(&dir.join("missing.obj"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("missing.obj: cannot read"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,0 +1,341 @@
+//! Per-frame uniforms (`shaders/frame.wgsl`), the view, and cascaded shadow maps.
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3, Vec4};
+use sylvan_gpu::{DEPTH_FORMAT, Gpu};
+
+/// Number of shadow cascades (matches `CASCADES` in `frame.wgsl`).
+pub const CASCADES: usize = 4;
+
+/// The frame uniform block, laid out as `Frame` in `frame.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub struct GpuFrame {
+    pub view_proj: [[f32; 4]; 4],
+    pub inv_view_proj: [[f32; 4]; 4],
+    pub cascade_view_proj: [[[f32; 4]; 4]; CASCADES],
+    pub camera: [f32; 4],
+    pub sun_dir: [f32; 4],
+    pub sun_color: [f32; 4],
+    pub sky_zenith: [f32; 4],
+    pub sky_horizon: [f32; 4],
+    pub sky_ground: [f32; 4],
+    pub cascade_far: [f32; 4],
+    pub shadow_params: [f32; 4],
+}
+
+/// A perspective view: where the eye is and what it sees.
+#[derive(Debug, Clone, Copy)]
+pub struct View {
+    /// Eye position.
+    pub eye: Vec3,
+    /// Point looked at.
+    pub target: Vec3,
+    /// Vertical field of view, radians.
+    pub fov_y: f32,
+    /// Width / height.
+    pub aspect: f32,
+    /// Near plane distance (metres).
+    pub near: f32,
+    /// Far plane distance (metres).
+    pub far: f32,
+}
+
+impl View {
+    /// World → view matrix (right-handed, Y up).
+    pub fn view(&self) -> Mat4 {
+        let dir = (self.target - self.eye).normalize_or(Vec3::NEG_Z);
+        let up = if dir.y.abs() > 0.999 {
+            Vec3::Z
+        } else {
+            Vec3::Y
+        };
+        Mat4::look_at_rh(self.eye, self.target, up)
+    }
+
+    /// Reversed-Z perspective projection (depth 1 at the near plane, 0 at the far plane).
+    pub fn proj(&self) -> Mat4 {
+        Mat4::perspective_rh(self.fov_y, self.aspect, self.far, self.near)
+    }
+
+    /// World → clip.
+    pub fn view_proj(&self) -> Mat4 {
+        self.proj() * self.view()
+    }
+
+    /// The 8 world-space corners of the slice of the frustum between view depths `near` and `far`.
+    pub fn slice_corners(&self, near: f32, far: f32) -> [Vec3; 8] {
+        let inv_view = self.view().inverse();
+        let t = (self.fov_y * 0.5).tan();
+        let mut out = [Vec3::ZERO; 8];
+        for (i, d) in [near, far].into_iter().enumerate() {
+            let (h, w) = (t * d, t * d * self.aspect);
+            for (j, (sx, sy)) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+                .into_iter()
+                .enumerate()
+            {
+                out[i * 4 + j] = inv_view.transform_point3(Vec3::new(sx * w, sy * h, -d));
+            }
+        }
+        out
+    }
+}
+
+/// Frustum planes (inward normals, `dot(n, p) + d ≥ 0` inside) extracted from a clip matrix.
+#[derive(Debug, Clone, Copy)]
+pub struct Frustum {
+    planes: [Vec4; 6],
+}
+
+impl Frustum {
+    /// Planes of `clip` (wgpu depth range 0..1; works for reversed Z too).
+    pub fn from_matrix(clip: Mat4) -> Self {
+        let r = [clip.row(0), clip.row(1), clip.row(2), clip.row(3)];
+        let raw = [
+            r[3] + r[0],
+            r[3] - r[0],
+            r[3] + r[1],
+            r[3] - r[1],
+            r[2],
+            r[3] - r[2],
+        ];
+        let planes = raw.map(|p| p / p.truncate().length().max(1e-12));
+        Self { planes }
+    }
+
+    /// Whether a sphere is at least partly inside.
+    pub fn intersects_sphere(&self, centre: Vec3, radius: f32) -> bool {
+        self.planes
+            .iter()
+            .all(|p| p.truncate().dot(centre) + p.w >= -radius)
+    }
+}
+
+/// Where the cascade split scheme starts (metres from the eye).
+pub const SPLIT_NEAR_M: f32 = 4.0;
+
+/// One shadow cascade: its light-space clip matrix and the view depth it covers.
+#[derive(Debug, Clone, Copy)]
+pub struct Cascade {
+    /// World → light clip (orthographic, depth 0..1).
+    pub view_proj: Mat4,
+    /// Far view distance covered.
+    pub far: f32,
+    /// Centre and half-size of the cascade's square in light space, for caster culling.
+    pub centre: Vec3,
+    /// Half-size in metres.
+    pub radius: f32,
+}
+
+/// Fits `CASCADES` shadow cascades to `view` up to `shadow_distance`, looking along `-sun`.
+/// `caster_reach` is how far towards the sun casters may stand (terrain relief + tree height).
+/// Each cascade is a sphere fit snapped to its texel grid, so shadows do not shimmer.
+pub fn fit_cascades(
+    view: &View,
+    sun: Vec3,
+    shadow_distance: f32,
+    caster_reach: f32,
+    resolution: u32,
+) -> [Cascade; CASCADES] {
+    let far_all = shadow_distance.min(view.far);
+    // Splits are computed from a few metres out, not from the near plane: a first cascade only
+    // centimetres deep would make every nearby leaf cover the whole map many times over.
+    let split_near = SPLIT_NEAR_M.min(far_all * 0.5);
+    let mut near = view.near;
+    std::array::from_fn(|i| {
+        // Practical split scheme (log/uniform blend, λ = 0.75).
+        let k = (i + 1) as f32 / CASCADES as f32;
+        let log = split_near * (far_all / split_near).powf(k);
+        let uni = split_near + (far_all - split_near) * k;
+        let far = 0.75 * log + 0.25 * uni;
+        let corners = view.slice_corners(near, far);
+        near = far;
+        let centre = corners.iter().copied().sum::<Vec3>() / 8.0;
+        let radius = corners
+            .iter()
+            .map(|c| c.distance(centre))
+            .fold(0.0, f32::max)
+            .ceil();
+        let up = if sun.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
+        let back = radius + caster_reach;
+        let light_view = Mat4::look_at_rh(Vec3::ZERO, -sun, up);
+        // Snap the centre to whole texels in light space.
+        let texel = 2.0 * radius / resolution as f32;
+        let mut c = light_view.transform_point3(centre);
+        c.x = (c.x / texel).floor() * texel;
+        c.y = (c.y / texel).floor() * texel;
+        let snapped = light_view.inverse().transform_point3(c);
+        let eye = snapped + sun * back;
+        let view_m = Mat4::look_at_rh(eye, snapped, up);
+        let proj = Mat4::orthographic_rh(-radius, radius, -radius, radius, 0.0, back + radius);
+        Cascade {
+            view_proj: proj * view_m,
+            far,
+            centre: snapped,
+            radius,
+        }
+    })
+}
+
+/// The group-0 layouts, the shadow-map array and its sampler: made once per renderer.
+pub struct FrameResources {
+    /// Layout for main passes: frame uniforms, shadow maps, comparison sampler.
+    pub main_layout: wgpu::BindGroupLayout,
+    /// Layout for shadow passes: frame uniforms only.
+    pub shadow_layout: wgpu::BindGroupLayout,
+    /// Frame uniforms of the camera view.
+    pub uniforms: wgpu::Buffer,
+    /// One uniform block per cascade (its `view_proj` is the cascade's).
+    pub cascade_uniforms: Vec<wgpu::Buffer>,
+    /// Main bind group.
+    pub main_bind: wgpu::BindGroup,
+    /// One shadow-pass bind group per cascade.
+    pub cascade_binds: Vec<wgpu::BindGroup>,
+    /// One depth view per cascade layer (render attachments).
+    pub cascade_views: Vec<wgpu::TextureView>,
+    /// Shadow-map resolution per cascade.
+    pub shadow_resolution: u32,
+    shadow_map: wgpu::Texture,
+}
+
+fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+impl FrameResources {
+    /// Creates layouts, buffers and a `resolution²` shadow map per cascade.
+    pub fn new(gpu: &Gpu, resolution: u32) -> Self {
+        let device = &gpu.device;
+        let main_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("frame_main_layout"),
+            entries: &[
+                uniform_entry(0),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Depth,
+                        view_dimension: wgpu::TextureViewDimension::D2Array,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 2,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
+                    count: None,
+                },
+            ],
+        });
+        let shadow_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("frame_shadow_layout"),
+            entries: &[uniform_entry(0)],
+        });
+        let make_uniform = |label: &str| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: std::mem::size_of::<GpuFrame>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let uniforms = make_uniform("frame_uniforms");
+        let cascade_uniforms: Vec<_> = (0..CASCADES)
+            .map(|_| make_uniform("cascade_uniforms"))
+            .collect();
+        let shadow_map = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("shadow_map"),
+            size: wgpu::Extent3d {
+                width: resolution,
+                height: resolution,
+                depth_or_array_layers: CASCADES as u32,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: DEPTH_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let array_view = shadow_map.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        });
+        let cascade_views = (0..CASCADES as u32)
+            .map(|layer| {
+                shadow_map.create_view(&wgpu::TextureViewDescriptor {
+                    label: Some("shadow_cascade"),
+                    dimension: Some(wgpu::TextureViewDimension::D2),
+                    base_array_layer: layer,
+                    array_layer_count: Some(1),
+                    ..Default::default()
+                })
+            })
+            .collect();
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("shadow_sampler"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            compare: Some(wgpu::CompareFunction::LessEqual),
+            ..Default::default()
+        });
+        let main_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("frame_main_bind"),
+            layout: &main_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: uniforms.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&array_view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::Sampler(&sampler),
+                },
+            ],
+        });
+        let cascade_binds = cascade_uniforms
+            .iter()
+            .map(|b| {
+                device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("cascade_bind"),
+                    layout: &shadow_layout,
+                    entries: &[wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: b.as_entire_binding(),
+                    }],
+                })
+            })
+            .collect();
+        Self {
+            main_layout,
+            shadow_layout,
+            uniforms,
+            cascade_uniforms,
+            main_bind,
+            cascade_binds,
+            cascade_views,
+            shadow_resolution: resolution,
+            shadow_map,
+        }
+    }
+
+    /// GPU bytes of the shadow maps.
+    pub fn bytes(&self) -> u64 {
+        let s = self.shadow_map.size();
+        s.width as u64 * s.height as u64 * s.depth_or_array_layers as u64 * 4
+    }
+}

@@ -1,0 +1,163 @@
+//! Tree instances on the GPU: per frame, trees are culled against the view and each shadow
+//! cascade on the CPU and written, grouped by pass and species, into one persistent buffer.
+//! Nothing is allocated per frame: the CPU staging vector and the buffer are sized once.
+
+use crate::frame::{CASCADES, Cascade, Frustum};
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use std::ops::Range;
+use sylvan_gpu::Gpu;
+use sylvan_scene::TreeInstance;
+
+/// One tree as the vertex shader sees it (`PlantIn` locations 4 and 5).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable, Debug, PartialEq)]
+pub struct GpuTreeInstance {
+    /// xyz: trunk base; w: uniform scale from plant units to metres.
+    pub base_scale: [f32; 4],
+    /// x: cos(rotation); y: sin(rotation); z: tint seed in [0, 1); w: unused.
+    pub rot: [f32; 4],
+}
+
+impl GpuTreeInstance {
+    /// The per-instance vertex layout, locations 4 and 5.
+    pub const LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+        array_stride: std::mem::size_of::<GpuTreeInstance>() as u64,
+        step_mode: wgpu::VertexStepMode::Instance,
+        attributes: &wgpu::vertex_attr_array![4 => Float32x4, 5 => Float32x4],
+    };
+}
+
+/// A tree prepared for culling: GPU record plus world bounding sphere.
+#[derive(Clone, Copy, Debug)]
+struct Placed {
+    gpu: GpuTreeInstance,
+    centre: Vec3,
+    radius: f32,
+    species: usize,
+}
+
+/// The per-frame instance lists: `ranges[pass][species]` into one buffer, pass 0 the camera view
+/// and pass `1 + c` shadow cascade `c`.
+pub struct Instances {
+    placed: Vec<Placed>,
+    staging: Vec<GpuTreeInstance>,
+    buffer: wgpu::Buffer,
+    /// `ranges[pass][species]`: instance range in the buffer.
+    pub ranges: Vec<Vec<Range<u32>>>,
+    species_count: usize,
+}
+
+/// Per-species model-space bounds, for the culling spheres and scaling.
+#[derive(Debug, Clone, Copy)]
+pub struct SpeciesBounds {
+    /// Model-space bbox min.
+    pub min: Vec3,
+    /// Model-space bbox max.
+    pub max: Vec3,
+}
+
+impl Instances {
+    /// Places every tree (scale from plant height to tree height) and sizes the buffer for the
+    /// worst case: every tree in the view and in every cascade.
+    pub fn new(gpu: &Gpu, trees: &[TreeInstance], bounds: &[SpeciesBounds]) -> Self {
+        let placed: Vec<Placed> = trees
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| (t.species as usize) < bounds.len())
+            .map(|(i, t)| {
+                let b = bounds[t.species as usize];
+                let scale = t.height / b.max.y.max(1e-3);
+                let local_centre = (b.min + b.max) * 0.5 * scale;
+                let radius = (b.max - b.min).length() * 0.5 * scale;
+                let (s, c) = t.rotation.sin_cos();
+                let centre = t.position
+                    + Vec3::new(
+                        c * local_centre.x + s * local_centre.z,
+                        local_centre.y,
+                        -s * local_centre.x + c * local_centre.z,
+                    );
+                let seed =
+                    ((i as u32).wrapping_mul(2_654_435_761) >> 8) as f32 / (1u32 << 24) as f32;
+                Placed {
+                    gpu: GpuTreeInstance {
+                        base_scale: [t.position.x, t.position.y, t.position.z, scale],
+                        rot: [c, s, seed, 0.0],
+                    },
+                    centre,
+                    radius,
+                    species: t.species as usize,
+                }
+            })
+            .collect();
+        let capacity = (placed.len().max(1) * (1 + CASCADES)) as u64;
+        let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("tree_instances"),
+            size: capacity * std::mem::size_of::<GpuTreeInstance>() as u64,
+            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Self {
+            staging: Vec::with_capacity(capacity as usize),
+            placed,
+            buffer,
+            ranges: vec![vec![0..0; bounds.len()]; 1 + CASCADES],
+            species_count: bounds.len(),
+        }
+    }
+
+    /// Culls against the view frustum and each cascade, and uploads the survivors.
+    pub fn update(
+        &mut self,
+        gpu: &Gpu,
+        frustum: &Frustum,
+        eye: Vec3,
+        far: f32,
+        cascades: Option<&[Cascade; CASCADES]>,
+    ) {
+        self.staging.clear();
+        for species in 0..self.species_count {
+            let start = self.staging.len() as u32;
+            for p in self.placed.iter().filter(|p| p.species == species) {
+                if p.centre.distance(eye) - p.radius < far
+                    && frustum.intersects_sphere(p.centre, p.radius)
+                {
+                    self.staging.push(p.gpu);
+                }
+            }
+            self.ranges[0][species] = start..self.staging.len() as u32;
+        }
+        for c in 0..CASCADES {
+            for species in 0..self.species_count {
+                let start = self.staging.len() as u32;
+                if let Some(cascades) = cascades {
+                    let cas = &cascades[c];
+                    let clip = Frustum::from_matrix(cas.view_proj);
+                    for p in self.placed.iter().filter(|p| p.species == species) {
+                        if clip.intersects_sphere(p.centre, p.radius) {
+                            self.staging.push(p.gpu);
+                        }
+                    }
+                }
+                self.ranges[1 + c][species] = start..self.staging.len() as u32;
+            }
+        }
+        gpu.queue
+            .write_buffer(&self.buffer, 0, bytemuck::cast_slice(&self.staging));
+    }
+
+    /// The instance buffer (bind as vertex buffer slot 1).
+    pub fn buffer(&self) -> &wgpu::Buffer {
+        &self.buffer
+    }
+
+    /// Total trees placed.
+    pub fn total(&self) -> usize {
+        self.placed.len()
+    }
+
+    /// Trees drawn in the camera view.
+    pub fn drawn(&self) -> u32 {
+        self.ranges[0].iter().map(|r| r.end - r.start).sum()
+    }
+}

@@ -1,0 +1,428 @@
+//! The frame: culling, shadow cascades, main pass, resolve, timing.
+
+use crate::RenderError;
+use crate::frame::{self, CASCADES, FrameResources, Frustum, GpuFrame, View};
+use crate::instances::{Instances, SpeciesBounds};
+use crate::pipeline::HDR_FORMAT;
+use crate::sky::SkyPass;
+use crate::technique::geometry::Geometry;
+use crate::technique::{DrawContext, DrawCounts, Representation, TechniqueKind};
+use crate::terrain::TerrainPass;
+use glam::{Mat4, Vec3};
+use std::collections::BTreeMap;
+use sylvan_gpu::{FrameTimer, Gpu, OUTPUT_FORMAT, RenderTarget, Resolver, TimerKind};
+use sylvan_plant::Plant;
+use sylvan_scene::{Camera, PlantSource, Scene, Sun};
+
+/// Largest supersampling factor per axis (`--spp` up to 64).
+pub const MAX_SPP: u32 = 64;
+
+/// How to render.
+#[derive(Debug, Clone)]
+pub struct RenderOptions {
+    /// Output width in pixels.
+    pub width: u32,
+    /// Output height in pixels.
+    pub height: u32,
+    /// Samples per pixel: a perfect square (1, 4, 9, 16, …); `√spp` supersampling per axis.
+    pub spp: u32,
+    /// The tree representation.
+    pub technique: TechniqueKind,
+    /// Cascaded shadow maps on or off.
+    pub shadows: bool,
+    /// Shadow-map resolution per cascade.
+    pub shadow_resolution: u32,
+    /// Shadows are cast up to this distance from the eye (metres).
+    pub shadow_distance: f32,
+    /// Exposure multiplier before tone mapping.
+    pub exposure: f32,
+    /// Time with the wall clock even where GPU timestamps exist.
+    pub wall_timer: bool,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        Self {
+            width: 1280,
+            height: 720,
+            spp: 1,
+            technique: TechniqueKind::Geometry,
+            shadows: true,
+            shadow_resolution: 2048,
+            shadow_distance: 1500.0,
+            exposure: 1.0,
+            wall_timer: false,
+        }
+    }
+}
+
+impl RenderOptions {
+    /// Samples per axis, after checking `spp` is a perfect square in range.
+    pub fn factor(&self) -> Result<u32, RenderError> {
+        let f = (self.spp as f64).sqrt().round() as u32;
+        if self.spp == 0 || f * f != self.spp || f > 8 || self.spp > MAX_SPP {
+            return Err(RenderError::Option(format!(
+                "--spp {}: samples per pixel must be a perfect square from 1 to {MAX_SPP} — use 1, 4, 9, 16, 25, 36, 49 or 64",
+                self.spp
+            )));
+        }
+        Ok(f)
+    }
+}
+
+/// What one frame cost and drew.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameStats {
+    /// Frame time in milliseconds (GPU timestamps, or wall clock).
+    pub frame_ms: f64,
+    /// Which clock measured `frame_ms`.
+    pub timer: TimerKind,
+    /// Trees in the scene.
+    pub trees_total: usize,
+    /// Trees drawn in the camera view, per technique name.
+    pub trees_drawn: BTreeMap<String, u32>,
+    /// Triangles submitted in the camera pass (trees + terrain).
+    pub triangles: u64,
+    /// Triangles submitted in all shadow passes.
+    pub shadow_triangles: u64,
+    /// Draw calls over all passes.
+    pub draw_calls: u32,
+    /// GPU bytes of the technique's assets (meshes, textures).
+    pub asset_bytes: u64,
+    /// GPU bytes of everything the renderer holds (assets, terrain, shadow maps, targets).
+    pub gpu_bytes: u64,
+}
+
+struct Targets {
+    hdr: RenderTarget,
+    output: RenderTarget,
+    resolve_source: wgpu::BindGroup,
+    factor: u32,
+}
+
+/// Renders a scene with one technique. Create once; call [`Renderer::render`] per frame.
+pub struct Renderer {
+    options: RenderOptions,
+    frame: FrameResources,
+    sky: SkyPass,
+    terrain: TerrainPass,
+    technique: Geometry,
+    instances: Instances,
+    resolver: Resolver,
+    timer: FrameTimer,
+    targets: Targets,
+    scene_sky: sylvan_scene::Sky,
+    fog_half: f32,
+    far: f32,
+    caster_reach: f32,
+}
+
+/// Loads each species' plant (presets by name, files by path), in species order.
+pub fn load_plants(scene: &Scene) -> Result<Vec<Plant>, RenderError> {
+    let mut loaded: Vec<(PlantSource, Plant)> = Vec::new();
+    let mut out = Vec::with_capacity(scene.species.len());
+    for species in &scene.species {
+        if let Some((_, p)) = loaded.iter().find(|(s, _)| *s == species.plant) {
+            out.push(p.clone());
+            continue;
+        }
+        let plant = match &species.plant {
+            PlantSource::Preset(name) => sylvan_plant::preset(name),
+            PlantSource::File(path) => sylvan_plant::load(path),
+        }
+        .map_err(|e| RenderError::Plant(e.to_string()))?;
+        loaded.push((species.plant.clone(), plant.clone()));
+        out.push(plant);
+    }
+    Ok(out)
+}
+
+impl Renderer {
+    /// Prepares everything for `scene` drawn with `plants` (one per species).
+    pub fn new(
+        gpu: &Gpu,
+        scene: &Scene,
+        plants: &[Plant],
+        options: &RenderOptions,
+    ) -> Result<Self, RenderError> {
+        if plants.len() != scene.species.len() {
+            return Err(RenderError::Plant(format!(
+                "{} plants for {} species",
+                plants.len(),
+                scene.species.len()
+            )));
+        }
+        let factor = options.factor()?;
+        if options.technique != TechniqueKind::Geometry {
+            return Err(RenderError::NotImplemented(options.technique.name()));
+        }
+        let res = options
+            .shadow_resolution
+            .clamp(256, gpu.device.limits().max_texture_dimension_2d);
+        let frame = FrameResources::new(gpu, res);
+        let resolver = Resolver::new(gpu);
+        let targets = Self::make_targets(gpu, &resolver, options.width, options.height, factor)?;
+        let technique = Geometry::prepare(gpu, &frame, plants)?;
+        let bounds: Vec<SpeciesBounds> = plants
+            .iter()
+            .map(|p| SpeciesBounds {
+                min: Vec3::from(p.bbox_min),
+                max: Vec3::from(p.bbox_max),
+            })
+            .collect();
+        let instances = Instances::new(gpu, &scene.trees, &bounds);
+        let t = &scene.terrain;
+        let (lo, hi) = t
+            .heights
+            .iter()
+            .fold((f32::MAX, f32::MIN), |(a, b), &h| (a.min(h), b.max(h)));
+        let tallest = scene.trees.iter().map(|t| t.height).fold(0.0, f32::max);
+        let renderer = Self {
+            sky: SkyPass::new(gpu, &frame),
+            terrain: TerrainPass::new(gpu, &frame, t),
+            frame,
+            technique,
+            instances,
+            resolver,
+            timer: FrameTimer::new(gpu, options.wall_timer),
+            targets,
+            scene_sky: scene.sky,
+            fog_half: scene.fog.half_distance_m,
+            far: (t.size[0].hypot(t.size[1]) + (hi - lo) + 500.0).max(1000.0),
+            caster_reach: (hi - lo) + tallest + 50.0,
+            options: options.clone(),
+        };
+        gpu.check()?;
+        Ok(renderer)
+    }
+
+    fn make_targets(
+        gpu: &Gpu,
+        resolver: &Resolver,
+        width: u32,
+        height: u32,
+        factor: u32,
+    ) -> Result<Targets, RenderError> {
+        if width == 0 || height == 0 {
+            return Err(RenderError::Option(format!(
+                "--size {width}x{height}: width and height must be at least 1"
+            )));
+        }
+        let hdr = RenderTarget::new(
+            gpu,
+            "hdr_target",
+            width * factor,
+            height * factor,
+            HDR_FORMAT,
+        )?;
+        let output = RenderTarget::new(gpu, "output_target", width, height, OUTPUT_FORMAT)?;
+        Ok(Targets {
+            resolve_source: resolver.bind_source(gpu, &hdr),
+            hdr,
+            output,
+            factor,
+        })
+    }
+
+    /// Changes the output size (targets are re-created only when it differs).
+    pub fn resize(&mut self, gpu: &Gpu, width: u32, height: u32) -> Result<(), RenderError> {
+        if (width, height) != (self.targets.output.width, self.targets.output.height) {
+            self.targets =
+                Self::make_targets(gpu, &self.resolver, width, height, self.targets.factor)?;
+            self.options.width = width;
+            self.options.height = height;
+        }
+        Ok(())
+    }
+
+    /// The view for `camera` at the current output size.
+    pub fn view(&self, camera: &Camera) -> View {
+        View {
+            eye: camera.position,
+            target: camera.look_at,
+            fov_y: camera.fov_deg.clamp(1.0, 170.0).to_radians(),
+            aspect: self.targets.output.width as f32 / self.targets.output.height as f32,
+            near: 0.25,
+            far: self.far,
+        }
+    }
+
+    /// Renders one frame from `camera` under `sun` into the output target and times it.
+    pub fn render(
+        &mut self,
+        gpu: &Gpu,
+        camera: &Camera,
+        sun: &Sun,
+    ) -> Result<FrameStats, RenderError> {
+        let view = self.view(camera);
+        let sun_dir = sun.direction();
+        let shadows = self.options.shadows && sun_dir.y > 0.0;
+        let cascades = frame::fit_cascades(
+            &view,
+            sun_dir,
+            self.options.shadow_distance,
+            self.caster_reach,
+            self.frame.shadow_resolution,
+        );
+        let view_proj = view.view_proj();
+        let frustum = Frustum::from_matrix(view_proj);
+        self.instances.update(
+            gpu,
+            &frustum,
+            view.eye,
+            view.far,
+            shadows.then_some(&cascades),
+        );
+
+        let raw = self.frame_uniforms(&view, view_proj, sun, sun_dir, shadows, &cascades);
+        gpu.queue
+            .write_buffer(&self.frame.uniforms, 0, bytemuck::bytes_of(&raw));
+        for (c, buffer) in cascades.iter().zip(&self.frame.cascade_uniforms) {
+            let mut r = raw;
+            r.view_proj = c.view_proj.to_cols_array_2d();
+            gpu.queue.write_buffer(buffer, 0, bytemuck::bytes_of(&r));
+        }
+
+        let mut encoder = gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("frame"),
+            });
+        self.timer.begin(&mut encoder);
+        let mut shadow_counts = DrawCounts::default();
+        for c in 0..CASCADES {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("shadow_pass"),
+                color_attachments: &[],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &self.frame.cascade_views[c],
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            if !shadows {
+                continue;
+            }
+            pass.set_bind_group(0, &self.frame.cascade_binds[c], &[]);
+            shadow_counts.draw_calls += self.terrain.draw(&mut pass, true);
+            shadow_counts.triangles += self.terrain.triangles();
+            let ctx = DrawContext {
+                frame_bind: &self.frame.cascade_binds[c],
+                instances: &self.instances,
+                ranges: &self.instances.ranges[1 + c],
+            };
+            shadow_counts += self.technique.draw_shadow(&mut pass, &ctx);
+        }
+        let mut main_counts = DrawCounts::default();
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("main_pass"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &self.targets.hdr.color_view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &self.targets.hdr.depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(0.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_bind_group(0, &self.frame.main_bind, &[]);
+            main_counts.draw_calls += self.sky.draw(&mut pass);
+            main_counts.draw_calls += self.terrain.draw(&mut pass, false);
+            main_counts.triangles += self.terrain.triangles();
+            let ctx = DrawContext {
+                frame_bind: &self.frame.main_bind,
+                instances: &self.instances,
+                ranges: &self.instances.ranges[0],
+            };
+            main_counts += self.technique.draw(&mut pass, &ctx);
+        }
+        let t = &self.targets;
+        self.resolver.encode(
+            gpu,
+            &mut encoder,
+            &t.resolve_source,
+            &t.output,
+            t.factor,
+            self.options.exposure,
+        )?;
+        self.timer.end(&mut encoder);
+        gpu.queue.submit([encoder.finish()]);
+        let frame_ms = self.timer.read_ms(gpu)?;
+        gpu.check()?;
+
+        let asset_bytes = self.technique.bytes();
+        Ok(FrameStats {
+            frame_ms,
+            timer: self.timer.kind(),
+            trees_total: self.instances.total(),
+            trees_drawn: BTreeMap::from([(Geometry::NAME.to_string(), self.instances.drawn())]),
+            triangles: main_counts.triangles,
+            shadow_triangles: shadow_counts.triangles,
+            draw_calls: main_counts.draw_calls + shadow_counts.draw_calls + 1,
+            asset_bytes,
+            gpu_bytes: asset_bytes
+                + self.terrain.bytes()
+                + self.frame.bytes()
+                + t.hdr.bytes()
+                + t.output.bytes()
+                + self.instances.buffer().size(),
+        })
+    }
+
+    /// The last rendered frame as an sRGB image.
+    pub fn read_image(&self, gpu: &Gpu) -> Result<image::RgbaImage, RenderError> {
+        Ok(sylvan_gpu::read_rgba8(gpu, &self.targets.output.color)?)
+    }
+
+    fn frame_uniforms(
+        &self,
+        view: &View,
+        view_proj: Mat4,
+        sun: &Sun,
+        sun_dir: Vec3,
+        shadows: bool,
+        cascades: &[frame::Cascade; CASCADES],
+    ) -> GpuFrame {
+        let v4 = |c: [f32; 3], w: f32| [c[0], c[1], c[2], w];
+        // Below the horizon the sun fades out instead of lighting from underneath.
+        let sun_strength = (sun_dir.y * 10.0).clamp(0.0, 1.0);
+        let sun_color = sun.color.map(|c| c * sun_strength);
+        GpuFrame {
+            view_proj: view_proj.to_cols_array_2d(),
+            inv_view_proj: view_proj.inverse().to_cols_array_2d(),
+            cascade_view_proj: cascades.map(|c| c.view_proj.to_cols_array_2d()),
+            camera: [view.eye.x, view.eye.y, view.eye.z, self.fog_half],
+            sun_dir: [
+                sun_dir.x,
+                sun_dir.y,
+                sun_dir.z,
+                if shadows { 1.0 } else { 0.0 },
+            ],
+            sun_color: v4(sun_color, self.options.exposure),
+            sky_zenith: v4(self.scene_sky.zenith, 0.0),
+            sky_horizon: v4(self.scene_sky.horizon, 0.0),
+            sky_ground: v4(self.scene_sky.ground, 0.0),
+            cascade_far: cascades.map(|c| c.far),
+            shadow_params: [1.0 / self.frame.shadow_resolution as f32, 0.0, 0.0, 0.0],
+        }
+    }
+}

@@ -1,0 +1,119 @@
+// Technique `geometry`: full tree meshes, instanced per species. Wood is opaque; leaves are
+// alpha-tested and two-sided, lit by the sun from the front and by transmission from behind.
+
+struct Species {
+    bbox_min: vec4<f32>,
+    // xyz: bbox max; w: leaf translucency.
+    bbox_max: vec4<f32>,
+};
+
+@group(1) @binding(0) var leaf_texture: texture_2d<f32>;
+@group(1) @binding(1) var leaf_sampler: sampler;
+@group(1) @binding(2) var<uniform> species: Species;
+
+struct PlantIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+    @location(3) color: vec3<f32>,
+    // Instance: xyz trunk base, w uniform scale.
+    @location(4) base_scale: vec4<f32>,
+    // Instance: x cos(rotation), y sin(rotation), z per-tree tint seed.
+    @location(5) rot: vec4<f32>,
+};
+
+struct PlantOut {
+    @builtin(position) pos: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+    @location(3) color: vec3<f32>,
+    // x: ambient occlusion estimate from the position in the crown.
+    @location(4) ao: f32,
+};
+
+fn instance_transform(in: PlantIn) -> PlantOut {
+    let c = in.rot.x;
+    let s = in.rot.y;
+    let p = in.position * in.base_scale.w;
+    let world = vec3<f32>(c * p.x + s * p.z, p.y, -s * p.x + c * p.z) + in.base_scale.xyz;
+    let n = vec3<f32>(c * in.normal.x + s * in.normal.z, in.normal.y, -s * in.normal.x + c * in.normal.z);
+    var out: PlantOut;
+    out.pos = frame.view_proj * vec4<f32>(world, 1.0);
+    out.world = world;
+    out.normal = n;
+    out.uv = in.uv;
+    let tint = 0.85 + 0.3 * in.rot.z;
+    out.color = in.color * vec3<f32>(tint, mix(tint, 1.0, 0.5), 1.0);
+    // Crown self-occlusion for the sky term: points deep inside the crown see less sky.
+    let centre = (species.bbox_min.xyz + species.bbox_max.xyz) * 0.5;
+    let half_extent = max((species.bbox_max.xyz - species.bbox_min.xyz) * 0.5, vec3<f32>(1e-3));
+    let q = (in.position - centre) / half_extent;
+    let radial = clamp(length(q.xz), 0.0, 1.0);
+    let height = clamp((in.position.y - species.bbox_min.y) / (2.0 * half_extent.y), 0.0, 1.0);
+    out.ao = clamp(0.35 + 0.45 * radial + 0.3 * height, 0.0, 1.0);
+    return out;
+}
+
+@vertex
+fn vs_plant(in: PlantIn) -> PlantOut {
+    return instance_transform(in);
+}
+
+@fragment
+fn fs_wood(in: PlantOut) -> @location(0) vec4<f32> {
+    let n = normalize(in.normal);
+    let l = frame.sun_dir.xyz;
+    let ndl = max(dot(n, l), 0.0);
+    let vis = select(sun_visibility(in.world, n * 0.05), 0.0, ndl <= 0.0);
+    let light = frame.sun_color.rgb * ndl * vis + sky_light(n) * in.ao;
+    return vec4<f32>(apply_fog(in.color * light, in.world), 1.0);
+}
+
+fn leaf_sample(uv: vec2<f32>) -> vec4<f32> {
+    return textureSample(leaf_texture, leaf_sampler, uv);
+}
+
+@fragment
+fn fs_leaf(in: PlantOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    let tex = leaf_sample(in.uv);
+    if (tex.a < 0.5) {
+        discard;
+    }
+    var n = normalize(in.normal);
+    if (!front) {
+        n = -n;
+    }
+    let l = frame.sun_dir.xyz;
+    let ndl = dot(n, l);
+    let vis = sun_visibility(in.world, vec3<f32>(0.0));
+    let albedo = tex.rgb * in.color;
+    // Front: Lambert. Back: diffuse transmission through the thin leaf, yellower.
+    let translucency = species.bbox_max.w;
+    let transmitted = albedo * vec3<f32>(1.1, 1.25, 0.55) * translucency * max(-ndl, 0.0);
+    let direct = frame.sun_color.rgb * (albedo * max(ndl, 0.0) + transmitted) * vis;
+    let ambient = albedo * sky_light(n) * in.ao;
+    return vec4<f32>(apply_fog(direct + ambient, in.world), 1.0);
+}
+
+// Shadow casters: wood writes depth only; leaves discard by alpha.
+struct ShadowOut {
+    @builtin(position) pos: vec4<f32>,
+    @location(0) uv: vec2<f32>,
+};
+
+@vertex
+fn vs_plant_shadow(in: PlantIn) -> ShadowOut {
+    let t = instance_transform(in);
+    var out: ShadowOut;
+    out.pos = t.pos;
+    out.uv = t.uv;
+    return out;
+}
+
+@fragment
+fn fs_leaf_shadow(in: ShadowOut) {
+    if (textureSampleLevel(leaf_texture, leaf_sampler, in.uv, 0.0).a < 0.5) {
+        discard;
+    }
+}

@@ -1,0 +1,517 @@
+//! The TOML scene file (DESIGN.md, "Scene file"): raw `serde` tables with `deny_unknown_fields`
+//! and spans, then validation into a [`Scene`]. Every error is one line with the file, line and
+//! column of the offending value.
+
+use crate::error::{ErrorKind, Location, SceneError};
+use crate::heightmap::{Purpose, read_gray};
+use crate::placement::{Placement, PlacementError, PlacementMethod, place_trees};
+use crate::species::{Growth, RawSpecies, build_species};
+use crate::terrain::{MAX_TERRAIN_SIZE_M, ProceduralTerrain};
+use crate::types::{Camera, Fog, Scene, Sky, Sun, Terrain, TreeInstance};
+use glam::Vec3;
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+use toml::Spanned;
+
+pub(crate) type Span = std::ops::Range<usize>;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawScene {
+    terrain: Option<Spanned<RawTerrain>>,
+    #[serde(default)]
+    species: Vec<Spanned<RawSpecies>>,
+    sun: Option<RawSun>,
+    sky: Option<RawSky>,
+    fog: Option<RawFog>,
+    camera: Option<RawCamera>,
+    lod: Option<RawLod>,
+    placement: Option<RawPlacement>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawTerrain {
+    procedural: Option<Spanned<RawProcedural>>,
+    heightmap: Option<Spanned<String>>,
+    size_m: Option<Spanned<Size2>>,
+    height_m: Option<Spanned<[f32; 2]>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawProcedural {
+    seed: Option<u64>,
+    size_m: Option<Spanned<Size2>>,
+    relief_m: Option<Spanned<f32>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSun {
+    azimuth_deg: Option<f32>,
+    elevation_deg: Option<Spanned<f32>>,
+    color: Option<Spanned<[f32; 3]>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSky {
+    zenith: Option<Spanned<[f32; 3]>>,
+    horizon: Option<Spanned<[f32; 3]>>,
+    ground: Option<Spanned<[f32; 3]>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawFog {
+    half_distance_m: Option<Spanned<f32>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawCamera {
+    position: Option<Spanned<[f32; 3]>>,
+    look_at: Option<Spanned<[f32; 3]>>,
+    fov_deg: Option<Spanned<f32>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawLod {
+    #[serde(default)]
+    chain: Vec<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawPlacement {
+    seed: Option<u64>,
+    method: Option<Spanned<String>>,
+}
+
+/// An extent: one number (square) or `[x, z]`.
+struct Size2([f32; 2]);
+
+impl<'de> Deserialize<'de> for Size2 {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = Size2;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a size in metres: a number or [x, z]")
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<Size2, E> {
+                Ok(Size2([v as f32; 2]))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<Size2, E> {
+                Ok(Size2([v as f32; 2]))
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<Size2, E> {
+                Ok(Size2([v as f32; 2]))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut s: A) -> Result<Size2, A::Error> {
+                let x: f32 = s
+                    .next_element()?
+                    .ok_or_else(|| serde::de::Error::invalid_length(0, &self))?;
+                let z: f32 = s
+                    .next_element()?
+                    .ok_or_else(|| serde::de::Error::invalid_length(1, &self))?;
+                if s.next_element::<f32>()?.is_some() {
+                    return Err(serde::de::Error::invalid_length(3, &self));
+                }
+                Ok(Size2([x, z]))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// Parsing context: the file's text and path, for locating errors and resolving paths.
+pub(crate) struct Ctx<'a> {
+    text: &'a str,
+    path: &'a Path,
+}
+
+impl Ctx<'_> {
+    pub(crate) fn loc(&self, span: &Span) -> Location {
+        Location::at_offset(self.path, self.text, span.start)
+    }
+
+    pub(crate) fn invalid(
+        &self,
+        span: &Span,
+        what: impl Into<String>,
+        fix: impl Into<String>,
+    ) -> SceneError {
+        SceneError::new(ErrorKind::InvalidValue, self.loc(span), what, fix)
+    }
+
+    pub(crate) fn resolve(&self, file: &str) -> PathBuf {
+        let base = self.path.parent().unwrap_or(Path::new(""));
+        base.join(file)
+    }
+
+    pub(crate) fn non_empty<'s>(
+        &self,
+        s: &'s Spanned<String>,
+        key: &str,
+    ) -> Result<&'s str, SceneError> {
+        let v = s.get_ref().trim();
+        if v.is_empty() {
+            return Err(self.invalid(
+                &s.span(),
+                format!("`{key}` is empty"),
+                format!("give a value for `{key}`"),
+            ));
+        }
+        Ok(v)
+    }
+}
+
+/// Turn a `toml` error into a located one-line [`SceneError`].
+pub(crate) fn toml_error(e: &toml::de::Error, text: &str, path: &Path) -> SceneError {
+    let loc = match e.span() {
+        Some(span) => Location::at_offset(path, text, span.start),
+        None => Location::at(path, 1, 1),
+    };
+    let msg = e.message().trim();
+    if let Some(rest) = msg.strip_prefix("unknown field ") {
+        let (field, expected) = rest.split_once(", ").unwrap_or((rest, ""));
+        let fix = if expected.is_empty() {
+            "remove it or check its spelling".to_string()
+        } else {
+            format!("remove it or check its spelling ({expected})")
+        };
+        return SceneError::new(
+            ErrorKind::UnknownKey,
+            loc,
+            format!("unknown key {field}"),
+            fix,
+        );
+    }
+    let fix = if msg.starts_with("missing field") {
+        "add the key (see DESIGN.md, \"Scene file\")"
+    } else if msg.starts_with("invalid ") {
+        "give the value the expected type (see DESIGN.md, \"Scene file\")"
+    } else {
+        "fix the TOML syntax"
+    };
+    SceneError::new(ErrorKind::Syntax, loc, msg, fix)
+}
+
+/// Parse and build a scene from `text`, read from `path` (used in messages and to resolve
+/// relative paths).
+pub(crate) fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
+    let raw: RawScene = toml::from_str(text).map_err(|e| toml_error(&e, text, path))?;
+    let cx = Ctx { text, path };
+    let terrain = build_terrain(&cx, raw.terrain)?;
+    let placement = build_placement(&cx, raw.placement)?;
+    let mut species = Vec::with_capacity(raw.species.len());
+    let mut layouts = Vec::new();
+    let mut layout_spans = Vec::new();
+    let mut fixed: Vec<TreeInstance> = Vec::new();
+    for (i, s) in raw.species.into_iter().enumerate() {
+        let (s, growth) = build_species(&cx, i, s, &terrain, placement.seed)?;
+        match growth {
+            Growth::Density(layout, span) => {
+                layouts.push(layout);
+                layout_spans.push(span);
+            }
+            Growth::Fixed(trees) => fixed.extend(trees),
+        }
+        species.push(s);
+    }
+    let trees = match place_trees(&terrain, &layouts, &placement, &fixed) {
+        Ok(p) => p.trees,
+        Err(e) => {
+            // Point at the species contributing the most trees.
+            let area = terrain.size[0] * terrain.size[1] * 1e-4;
+            let worst = (0..layouts.len())
+                .max_by(|&a, &b| {
+                    let d = |i: usize| layouts[i].density.mean_per_ha() * area;
+                    d(a).total_cmp(&d(b))
+                })
+                .map_or(0..0, |i| layout_spans[i].clone());
+            let fix = match e {
+                PlacementError::TooManyTrees { .. } => {
+                    "lower density_per_ha or the terrain's size_m"
+                }
+                PlacementError::TooManyCandidates { .. } => {
+                    "use [placement] method = \"tiled\", or lower the peak density"
+                }
+            };
+            return Err(SceneError::new(
+                ErrorKind::Limit,
+                cx.loc(&worst),
+                e.to_string(),
+                fix,
+            ));
+        }
+    };
+    let camera = build_camera(&cx, raw.camera, &terrain)?;
+    Ok(Scene {
+        sun: build_sun(&cx, raw.sun)?,
+        sky: build_sky(&cx, raw.sky)?,
+        fog: build_fog(&cx, raw.fog)?,
+        camera,
+        terrain,
+        species,
+        trees,
+        lod_chain: raw.lod.map(|l| l.chain).unwrap_or_default(),
+        source: Some(path.to_path_buf()),
+    })
+}
+
+fn check_size(cx: &Ctx, s: &Spanned<Size2>) -> Result<[f32; 2], SceneError> {
+    let v = s.get_ref().0;
+    if v.iter()
+        .any(|&x| !x.is_finite() || x <= 0.0 || x > MAX_TERRAIN_SIZE_M)
+    {
+        return Err(cx.invalid(
+            &s.span(),
+            format!("size_m = [{}, {}] is out of range", v[0], v[1]),
+            format!("give metres in (0, {MAX_TERRAIN_SIZE_M}]"),
+        ));
+    }
+    Ok(v)
+}
+
+fn build_terrain(cx: &Ctx, raw: Option<Spanned<RawTerrain>>) -> Result<Terrain, SceneError> {
+    let default = ProceduralTerrain {
+        seed: 1,
+        size_m: [2000.0; 2],
+        relief_m: 150.0,
+    };
+    let Some(raw) = raw else {
+        return Ok(default.generate());
+    };
+    let span = raw.span();
+    let t = raw.into_inner();
+    match (t.procedural, t.heightmap) {
+        (Some(_), Some(h)) => Err(cx.invalid(
+            &h.span(),
+            "terrain has both `procedural` and `heightmap`",
+            "keep one of them",
+        )),
+        (proc_, None) => {
+            if let Some(h) = &t.height_m {
+                return Err(cx.invalid(
+                    &h.span(),
+                    "height_m applies to heightmaps",
+                    "use relief_m inside procedural = { … }",
+                ));
+            }
+            let p = proc_.map(|p| p.into_inner());
+            let mut out = default;
+            if let Some(p) = &p {
+                out.seed = p.seed.unwrap_or(default.seed);
+                if let Some(r) = &p.relief_m {
+                    let v = *r.get_ref();
+                    if !v.is_finite() || !(0.0..=100_000.0).contains(&v) {
+                        return Err(cx.invalid(
+                            &r.span(),
+                            format!("relief_m = {v} is out of range"),
+                            "give metres ≥ 0",
+                        ));
+                    }
+                    out.relief_m = v;
+                }
+            }
+            match (p.as_ref().and_then(|p| p.size_m.as_ref()), &t.size_m) {
+                (Some(_), Some(outer)) => {
+                    return Err(cx.invalid(
+                        &outer.span(),
+                        "size_m given twice",
+                        "keep the one inside procedural = { … }",
+                    ));
+                }
+                (Some(s), None) | (None, Some(s)) => out.size_m = check_size(cx, s)?,
+                (None, None) => {}
+            }
+            Ok(out.generate())
+        }
+        (None, Some(h)) => {
+            let Some(size) = &t.size_m else {
+                return Err(cx.invalid(
+                    &span,
+                    "a heightmap terrain needs its extent",
+                    "add size_m = [x, z] in metres",
+                ));
+            };
+            let size = check_size(cx, size)?;
+            let height_m = match &t.height_m {
+                None => None,
+                Some(r) => {
+                    let [lo, hi] = *r.get_ref();
+                    if !(lo.is_finite() && hi.is_finite()) || lo > hi {
+                        return Err(cx.invalid(
+                            &r.span(),
+                            format!("height_m = [{lo}, {hi}] is not a valid range"),
+                            "write [min, max] in metres with min ≤ max",
+                        ));
+                    }
+                    Some([lo, hi])
+                }
+            };
+            let file = cx.resolve(cx.non_empty(&h, "heightmap")?);
+            let raster = read_gray(&file, Purpose::Heightmap, &cx.loc(&h.span()))?;
+            raster.into_terrain(size, height_m).map_err(|()| {
+                cx.invalid(
+                    &span,
+                    "this heightmap stores normalised samples; its height range is unknown",
+                    "add height_m = [min, max] in metres",
+                )
+            })
+        }
+    }
+}
+
+fn build_placement(cx: &Ctx, raw: Option<RawPlacement>) -> Result<Placement, SceneError> {
+    let mut p = Placement::default();
+    let Some(raw) = raw else { return Ok(p) };
+    p.seed = raw.seed.unwrap_or(p.seed);
+    if let Some(m) = raw.method {
+        p.method = match m.get_ref().as_str() {
+            "poisson" => PlacementMethod::Poisson,
+            "tiled" => PlacementMethod::Tiled,
+            other => {
+                return Err(cx.invalid(
+                    &m.span(),
+                    format!("unknown placement method `{other}`"),
+                    "use \"poisson\" or \"tiled\"",
+                ));
+            }
+        };
+    }
+    Ok(p)
+}
+
+fn colour(
+    cx: &Ctx,
+    c: Option<Spanned<[f32; 3]>>,
+    default: [f32; 3],
+    key: &str,
+) -> Result<[f32; 3], SceneError> {
+    let Some(c) = c else { return Ok(default) };
+    let v = *c.get_ref();
+    if v.iter().any(|x| !x.is_finite() || *x < 0.0) {
+        return Err(cx.invalid(
+            &c.span(),
+            format!("{key} has a negative or non-finite component"),
+            "give linear RGB values ≥ 0",
+        ));
+    }
+    Ok(v)
+}
+
+fn build_sun(cx: &Ctx, raw: Option<RawSun>) -> Result<Sun, SceneError> {
+    let mut sun = Sun::default();
+    let Some(raw) = raw else { return Ok(sun) };
+    sun.azimuth_deg = raw.azimuth_deg.unwrap_or(sun.azimuth_deg);
+    if let Some(e) = raw.elevation_deg {
+        let v = *e.get_ref();
+        if !(-90.0..=90.0).contains(&v) {
+            return Err(cx.invalid(
+                &e.span(),
+                format!("elevation_deg = {v} is out of range"),
+                "give degrees in [-90, 90]",
+            ));
+        }
+        sun.elevation_deg = v;
+    }
+    sun.color = colour(cx, raw.color, sun.color, "color")?;
+    Ok(sun)
+}
+
+fn build_sky(cx: &Ctx, raw: Option<RawSky>) -> Result<Sky, SceneError> {
+    let d = Sky::default();
+    let Some(raw) = raw else { return Ok(d) };
+    Ok(Sky {
+        zenith: colour(cx, raw.zenith, d.zenith, "zenith")?,
+        horizon: colour(cx, raw.horizon, d.horizon, "horizon")?,
+        ground: colour(cx, raw.ground, d.ground, "ground")?,
+    })
+}
+
+fn build_fog(cx: &Ctx, raw: Option<RawFog>) -> Result<Fog, SceneError> {
+    let mut fog = Fog::default();
+    if let Some(h) = raw.and_then(|r| r.half_distance_m) {
+        let v = *h.get_ref();
+        if !v.is_finite() || v < 0.0 {
+            return Err(cx.invalid(
+                &h.span(),
+                format!("half_distance_m = {v} is negative"),
+                "give metres ≥ 0 (0 disables fog)",
+            ));
+        }
+        fog.half_distance_m = v;
+    }
+    Ok(fog)
+}
+
+fn build_camera(cx: &Ctx, raw: Option<RawCamera>, terrain: &Terrain) -> Result<Camera, SceneError> {
+    let mut cam = Camera::overview(terrain);
+    let Some(raw) = raw else { return Ok(cam) };
+    for (v, slot) in [
+        (&raw.position, &mut cam.position),
+        (&raw.look_at, &mut cam.look_at),
+    ] {
+        if let Some(v) = v {
+            let p = Vec3::from(*v.get_ref());
+            if !p.is_finite() {
+                return Err(cx.invalid(
+                    &v.span(),
+                    "camera coordinates must be finite",
+                    "give [x, y, z] in metres",
+                ));
+            }
+            *slot = p;
+        }
+    }
+    if cam.position.distance(cam.look_at) < 1e-3 {
+        let span = raw
+            .look_at
+            .as_ref()
+            .or(raw.position.as_ref())
+            .map_or(0..0, |s| s.span());
+        return Err(cx.invalid(
+            &span,
+            "camera look_at equals its position",
+            "look at a point away from the eye",
+        ));
+    }
+    if let Some(f) = raw.fov_deg {
+        let v = *f.get_ref();
+        if !(1.0..=170.0).contains(&v) {
+            return Err(cx.invalid(
+                &f.span(),
+                format!("fov_deg = {v} is out of range"),
+                "give a vertical field of view in [1, 170] degrees",
+            ));
+        }
+        cam.fov_deg = v;
+    }
+    Ok(cam)
+}
+
+impl Scene {
+    /// Load a scene file (TOML, see DESIGN.md "Scene file").
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            SceneError::new(
+                ErrorKind::Io,
+                Location::file(path),
+                format!("cannot read scene file ({e})"),
+                "check the path",
+            )
+        })?;
+        Scene::parse(&text, path)
+    }
+
+    /// Build a scene from TOML `text` as if read from `path`: `path` names the file in errors
+    /// and relative paths resolve against its folder.
+    pub fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
+        parse_scene(text, path)
+    }
+}

@@ -1,0 +1,528 @@
+//! Seeded tree placement with blue-noise spacing.
+//!
+//! All density-driven species share ONE candidate pattern: a Poisson-disk set (Bridson 2007,
+//! "Fast Poisson Disk Sampling in Arbitrary Dimensions") over the whole terrain, or a periodic
+//! Poisson tile repeated over it (`tiled`, constant memory for huge terrains). Its radius comes
+//! from the sum of the species' peak densities, so no two trees of any species are closer than
+//! [`Placed::min_spacing_m`]. Each candidate draws one uniform number `u`: it is kept when
+//! `u·ρ < D(x)` (ρ = the pattern's measured density, D = the summed local density), and the same
+//! `u·ρ` picks the species by the cumulative local densities — density maps thus modulate both
+//! acceptance and the species mix. Expected count is exactly ∫D over the terrain.
+//!
+//! Deviation: tiles are repeated without per-tile rotation, since rotating a periodic tile would
+//! break the minimum spacing at tile borders; the random thinning hides the period.
+
+use crate::rng::Rng;
+use crate::terrain::bilinear;
+use crate::types::{Terrain, TreeInstance};
+use glam::{Vec2, Vec3};
+use std::fmt;
+
+/// Most trees a scene may hold.
+pub const MAX_TREES: usize = 2_000_000;
+/// Most candidate points a `poisson` pattern may generate (use `tiled` beyond).
+pub const MAX_PATTERN_POINTS: usize = 6_000_000;
+/// Highest accepted density, trees per hectare (one tree per m²).
+pub const MAX_DENSITY_PER_HA: f32 = 10_000.0;
+/// Default `density_per_ha` (and the scale of a density map when none is given).
+pub const DEFAULT_DENSITY_PER_HA: f32 = 400.0;
+
+/// Bridson candidates per active point.
+const BRIDSON_K: u32 = 18;
+/// r² · (target peak density): the pattern has ≈ 0.88 / r² points, so thinning keeps ~85 % where
+/// the density peaks.
+const PACKING: f32 = 0.75;
+/// Points per r² of the pattern (measured; used only for estimates and the tile size).
+const PATTERN_DENSITY: f64 = 0.88;
+/// Points per periodic tile in `tiled` placement.
+const TILE_POINTS: f32 = 2500.0;
+
+/// How candidate points are generated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum PlacementMethod {
+    /// One Poisson-disk pattern over the whole terrain (best quality, memory ∝ trees).
+    #[default]
+    Poisson,
+    /// A periodic Poisson tile repeated over the terrain (constant memory).
+    Tiled,
+}
+
+/// The `[placement]` table.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Placement {
+    /// Seed for candidates, thinning, heights and rotations.
+    pub seed: u64,
+    /// Candidate generator.
+    pub method: PlacementMethod,
+}
+
+impl Default for Placement {
+    fn default() -> Self {
+        Self {
+            seed: 1,
+            method: PlacementMethod::Poisson,
+        }
+    }
+}
+
+/// A grayscale map stretched over the terrain (column 0 at X = 0, row 0 at Z = 0, samples on
+/// the edges like a heightmap), values in [0, 1].
+#[derive(Debug, Clone, PartialEq)]
+pub struct DensityMap {
+    /// Samples along X and Z, each ≥ 1.
+    pub resolution: [u32; 2],
+    /// Row-major values in [0, 1].
+    pub values: Vec<f32>,
+}
+
+/// How densely a species grows.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Density {
+    /// The same density everywhere, trees per hectare.
+    PerHectare(f32),
+    /// A map scaled so 1.0 (white) is `max_per_ha` trees per hectare.
+    Map {
+        /// The map.
+        map: DensityMap,
+        /// Trees per hectare where the map is white.
+        max_per_ha: f32,
+    },
+}
+
+impl Density {
+    /// Trees per m² at `(x, z)` on a terrain of extent `size`.
+    pub fn per_m2(&self, size: [f32; 2], x: f32, z: f32) -> f32 {
+        match self {
+            Density::PerHectare(d) => d * 1e-4,
+            Density::Map { map, max_per_ha } => {
+                let res = map.resolution.map(|n| n.max(2));
+                let v = if map.resolution.contains(&1) {
+                    map.values[0]
+                } else {
+                    bilinear(&map.values, res, size, x, z)
+                };
+                v * max_per_ha * 1e-4
+            }
+        }
+    }
+
+    /// The highest density anywhere, trees per hectare.
+    pub fn peak_per_ha(&self) -> f32 {
+        match self {
+            Density::PerHectare(d) => *d,
+            Density::Map { map, max_per_ha } => {
+                map.values.iter().fold(0.0f32, |a, &v| a.max(v)) * max_per_ha
+            }
+        }
+    }
+
+    /// The mean density over the terrain, trees per hectare.
+    pub fn mean_per_ha(&self) -> f32 {
+        match self {
+            Density::PerHectare(d) => *d,
+            Density::Map { map, max_per_ha } => {
+                let sum: f64 = map.values.iter().map(|&v| v as f64).sum();
+                (sum / map.values.len().max(1) as f64) as f32 * max_per_ha
+            }
+        }
+    }
+}
+
+/// One density-driven species to place.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpeciesLayout {
+    /// Index into `Scene::species`.
+    pub species: u32,
+    /// Height range, metres; each tree's height is uniform in it.
+    pub height_m: [f32; 2],
+    /// Where and how densely it grows.
+    pub density: Density,
+}
+
+/// Placement would exceed a limit; checked before anything large is allocated.
+#[derive(Debug, Clone, PartialEq)]
+pub enum PlacementError {
+    /// The expected tree count exceeds [`MAX_TREES`].
+    TooManyTrees {
+        /// Expected trees (density × area, plus fixed trees).
+        estimated: f64,
+    },
+    /// A `poisson` pattern would exceed [`MAX_PATTERN_POINTS`].
+    TooManyCandidates {
+        /// Expected candidate points.
+        estimated: f64,
+    },
+}
+
+impl fmt::Display for PlacementError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            PlacementError::TooManyTrees { estimated } => write!(
+                f,
+                "about {:.0} trees, more than the limit of {MAX_TREES}",
+                estimated
+            ),
+            PlacementError::TooManyCandidates { estimated } => write!(
+                f,
+                "the Poisson pattern would need about {:.0} candidate points, more than the \
+                 limit of {MAX_PATTERN_POINTS}",
+                estimated
+            ),
+        }
+    }
+}
+
+impl std::error::Error for PlacementError {}
+
+/// Placed trees and the spacing they respect.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Placed {
+    /// Fixed trees first (as given), then the density-driven ones.
+    pub trees: Vec<TreeInstance>,
+    /// Minimum distance between density-driven trees (and from them to fixed trees), metres;
+    /// 0 when no species is density-driven.
+    pub min_spacing_m: f32,
+}
+
+/// Expected number of density-driven trees on a terrain of extent `size`.
+pub fn estimate_trees(size: [f32; 2], layouts: &[SpeciesLayout]) -> f64 {
+    let area_ha = size[0] as f64 * size[1] as f64 * 1e-4;
+    layouts
+        .iter()
+        .map(|l| l.density.mean_per_ha() as f64 * area_ha)
+        .sum()
+}
+
+/// The highest summed density of `layouts`, trees per hectare: exact when every map shares one
+/// resolution (bilinear sums peak at grid points), else the sum of the peaks (an upper bound).
+pub fn peak_per_ha(layouts: &[SpeciesLayout]) -> f32 {
+    let mut uniform = 0.0;
+    let mut maps = Vec::new();
+    for l in layouts {
+        match &l.density {
+            Density::PerHectare(d) => uniform += d,
+            Density::Map { map, max_per_ha } => maps.push((map, *max_per_ha)),
+        }
+    }
+    let shared = maps
+        .windows(2)
+        .all(|w| w[0].0.resolution == w[1].0.resolution);
+    let maps_peak = if shared && !maps.is_empty() {
+        let n = maps[0].0.values.len();
+        (0..n)
+            .map(|i| maps.iter().map(|(m, s)| m.values[i] * s).sum::<f32>())
+            .fold(0.0, f32::max)
+    } else {
+        layouts
+            .iter()
+            .filter(|l| matches!(l.density, Density::Map { .. }))
+            .map(|l| l.density.peak_per_ha())
+            .sum()
+    };
+    uniform + maps_peak
+}
+
+/// Place `layouts` on `terrain` around the `fixed` trees (e.g. from positions CSVs), which are
+/// kept as given. Same inputs → identical output.
+pub fn place_trees(
+    terrain: &Terrain,
+    layouts: &[SpeciesLayout],
+    placement: &Placement,
+    fixed: &[TreeInstance],
+) -> Result<Placed, PlacementError> {
+    let size = terrain.size;
+    let estimated = estimate_trees(size, layouts) + fixed.len() as f64;
+    if estimated > MAX_TREES as f64 {
+        return Err(PlacementError::TooManyTrees { estimated });
+    }
+    let peak = peak_per_ha(layouts) * 1e-4;
+    if peak <= 0.0 {
+        return Ok(Placed {
+            trees: fixed.to_vec(),
+            min_spacing_m: 0.0,
+        });
+    }
+    let radius = (PACKING / peak).sqrt();
+    let area = size[0] as f64 * size[1] as f64;
+    let mut rng = Rng::new(placement.seed);
+    let (candidates, period, rho) = match placement.method {
+        PlacementMethod::Poisson => {
+            let estimated = PATTERN_DENSITY * area / (radius as f64 * radius as f64);
+            if estimated > MAX_PATTERN_POINTS as f64 {
+                return Err(PlacementError::TooManyCandidates { estimated });
+            }
+            let pts = poisson_disk(size, radius, rng.next_u64());
+            let rho = pts.len() as f64 / area.max(1e-6);
+            (pts, None, rho)
+        }
+        PlacementMethod::Tiled => {
+            let tile = (radius * (TILE_POINTS / PATTERN_DENSITY as f32).sqrt()).max(4.0 * radius);
+            let pts = poisson_tile(tile, radius, rng.next_u64());
+            let rho = pts.len() as f64 / (tile as f64 * tile as f64);
+            (pts, Some(tile), rho)
+        }
+    };
+    let blockers = SpatialHash::new(
+        fixed.iter().map(|t| Vec2::new(t.position.x, t.position.z)),
+        radius,
+    );
+    let mut trees = Vec::with_capacity(fixed.len() + (estimated * 1.05) as usize + 16);
+    trees.extend_from_slice(fixed);
+    let mut local = vec![0.0f32; layouts.len()];
+    let mut consider = |p: Vec2, rng: &mut Rng, trees: &mut Vec<TreeInstance>| {
+        if !terrain.contains(p.x, p.y) {
+            return;
+        }
+        let u = rng.f64() * rho;
+        let mut cum = 0.0f64;
+        let mut chosen = None;
+        for (i, l) in layouts.iter().enumerate() {
+            local[i] = l.density.per_m2(size, p.x, p.y);
+            cum += local[i] as f64;
+            if chosen.is_none() && u < cum {
+                chosen = Some(i);
+            }
+        }
+        let (hr, rot) = (rng.f32(), rng.f32());
+        let Some(i) = chosen else { return };
+        if blockers.any_within(p, radius) {
+            return;
+        }
+        let [h0, h1] = layouts[i].height_m;
+        trees.push(TreeInstance {
+            position: Vec3::new(p.x, terrain.height_at(p.x, p.y), p.y),
+            height: h0 + (h1 - h0) * hr,
+            rotation: rot * std::f32::consts::TAU,
+            species: layouts[i].species,
+        });
+    };
+    match period {
+        None => {
+            for &p in &candidates {
+                consider(p, &mut rng, &mut trees);
+            }
+        }
+        Some(tile) => {
+            let tiles = size.map(|s| (s / tile).ceil() as u32);
+            for ty in 0..tiles[1] {
+                for tx in 0..tiles[0] {
+                    let origin = Vec2::new(tx as f32, ty as f32) * tile;
+                    for &p in &candidates {
+                        consider(origin + p, &mut rng, &mut trees);
+                    }
+                }
+            }
+        }
+    }
+    if trees.len() > MAX_TREES {
+        return Err(PlacementError::TooManyTrees {
+            estimated: trees.len() as f64,
+        });
+    }
+    Ok(Placed {
+        trees,
+        min_spacing_m: radius,
+    })
+}
+
+/// Bridson's Poisson-disk sampling over `[0, size[0]] × [0, size[1]]`: no two points closer than
+/// `radius`, and (nearly) no gap that could hold another. Deterministic for a seed.
+pub fn poisson_disk(size: [f32; 2], radius: f32, seed: u64) -> Vec<Vec2> {
+    bridson(size, radius, seed, false)
+}
+
+/// A periodic Poisson-disk tile of side `tile`: the spacing holds across the wrap-around, so
+/// copies placed edge to edge keep it too.
+pub fn poisson_tile(tile: f32, radius: f32, seed: u64) -> Vec<Vec2> {
+    bridson([tile, tile], radius, seed, true)
+}
+
+fn bridson(size: [f32; 2], radius: f32, seed: u64, periodic: bool) -> Vec<Vec2> {
+    let mut rng = Rng::new(seed);
+    let cell_max = radius / std::f32::consts::SQRT_2;
+    let n = size.map(|s| ((s / cell_max).ceil() as usize).max(1));
+    let cell = [size[0] / n[0] as f32, size[1] / n[1] as f32];
+    let reach = [
+        (radius / cell[0]).ceil() as i64,
+        (radius / cell[1]).ceil() as i64,
+    ];
+    let mut grid = vec![u32::MAX; n[0] * n[1]];
+    let mut points: Vec<Vec2> = Vec::new();
+    let mut active: Vec<u32> = Vec::new();
+    let r2 = radius * radius;
+    let cell_of = |p: Vec2| {
+        let c = ((p.x / cell[0]) as usize).min(n[0] - 1);
+        let r = ((p.y / cell[1]) as usize).min(n[1] - 1);
+        (c, r)
+    };
+    let fits = |p: Vec2, grid: &[u32], points: &[Vec2]| {
+        let (c, r) = cell_of(p);
+        for dr in -reach[1]..=reach[1] {
+            for dc in -reach[0]..=reach[0] {
+                // Skip cells whose nearest point is already ≥ r away (the 5×5 block's corners).
+                let gap = |d: i64, c: f32| (d.abs() - 1).max(0) as f32 * c;
+                if gap(dc, cell[0]).powi(2) + gap(dr, cell[1]).powi(2) >= r2 {
+                    continue;
+                }
+                let (mut cc, mut rr) = (c as i64 + dc, r as i64 + dr);
+                let mut shift = Vec2::ZERO;
+                if periodic {
+                    let (w, h) = (n[0] as i64, n[1] as i64);
+                    shift.x = cc.div_euclid(w) as f32 * size[0];
+                    shift.y = rr.div_euclid(h) as f32 * size[1];
+                    cc = cc.rem_euclid(w);
+                    rr = rr.rem_euclid(h);
+                } else if cc < 0 || rr < 0 || cc >= n[0] as i64 || rr >= n[1] as i64 {
+                    continue;
+                }
+                let idx = grid[rr as usize * n[0] + cc as usize];
+                if idx != u32::MAX && (points[idx as usize] + shift).distance_squared(p) < r2 {
+                    return false;
+                }
+            }
+        }
+        true
+    };
+    let first = Vec2::new(rng.f32() * size[0], rng.f32() * size[1]);
+    let insert = |p: Vec2, grid: &mut [u32], points: &mut Vec<Vec2>, active: &mut Vec<u32>| {
+        let (c, r) = cell_of(p);
+        grid[r * n[0] + c] = points.len() as u32;
+        active.push(points.len() as u32);
+        points.push(p);
+    };
+    insert(first, &mut grid, &mut points, &mut active);
+    // Roberts' variant of Bridson: K candidates evenly spaced on the circle of radius r (+ε)
+    // from a random start angle — denser packing, and no trigonometry per candidate.
+    let ring: Vec<Vec2> = (0..BRIDSON_K)
+        .map(|j| Vec2::from_angle(j as f32 * std::f32::consts::TAU / BRIDSON_K as f32))
+        .collect();
+    let step = radius * 1.0001;
+    while !active.is_empty() {
+        let slot = rng.below(active.len());
+        let centre = points[active[slot] as usize];
+        let start = Vec2::from_angle(rng.f32() * std::f32::consts::TAU) * step;
+        let mut found = false;
+        for dir in &ring {
+            let mut p = centre + dir.rotate(start);
+            if periodic {
+                p = Vec2::new(p.x.rem_euclid(size[0]), p.y.rem_euclid(size[1]));
+                // rem_euclid can round up to exactly `size`.
+                p = p.min(Vec2::new(size[0], size[1]) * (1.0 - f32::EPSILON));
+            } else if !(0.0..size[0]).contains(&p.x) || !(0.0..size[1]).contains(&p.y) {
+                continue;
+            }
+            if fits(p, &grid, &points) {
+                insert(p, &mut grid, &mut points, &mut active);
+                found = true;
+                break;
+            }
+        }
+        if !found {
+            active.swap_remove(slot);
+        }
+    }
+    points
+}
+
+/// A uniform grid over points for "anything within r?" queries.
+struct SpatialHash {
+    cell: f32,
+    cells: std::collections::HashMap<(i64, i64), Vec<Vec2>>,
+}
+
+impl SpatialHash {
+    fn new(points: impl Iterator<Item = Vec2>, cell: f32) -> Self {
+        let mut cells: std::collections::HashMap<(i64, i64), Vec<Vec2>> = Default::default();
+        for p in points {
+            cells.entry(Self::key(p, cell)).or_default().push(p);
+        }
+        Self { cell, cells }
+    }
+
+    fn key(p: Vec2, cell: f32) -> (i64, i64) {
+        ((p.x / cell).floor() as i64, (p.y / cell).floor() as i64)
+    }
+
+    fn any_within(&self, p: Vec2, r: f32) -> bool {
+        if self.cells.is_empty() {
+            return false;
+        }
+        let (c, rr) = Self::key(p, self.cell);
+        let reach = (r / self.cell).ceil() as i64;
+        (-reach..=reach).any(|dy| {
+            (-reach..=reach).any(|dx| {
+                self.cells
+                    .get(&(c + dx, rr + dy))
+                    .is_some_and(|v| v.iter().any(|q| q.distance_squared(p) < r * r))
+            })
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn min_distance(points: &[Vec2]) -> f32 {
+        let mut best = f32::INFINITY;
+        let mut sorted: Vec<Vec2> = points.to_vec();
+        sorted.sort_by(|a, b| a.x.total_cmp(&b.x));
+        for i in 0..sorted.len() {
+            for j in i + 1..sorted.len() {
+                if sorted[j].x - sorted[i].x >= best {
+                    break;
+                }
+                best = best.min(sorted[i].distance(sorted[j]));
+            }
+        }
+        best
+    }
+
+    #[test]
+    fn bridson_respects_radius_and_fills() {
+        let pts = poisson_disk([100.0, 60.0], 3.0, 9);
+        assert!(min_distance(&pts) >= 3.0);
+        let density = pts.len() as f64 * 9.0 / 6000.0;
+        assert!((density - PATTERN_DENSITY).abs() < 0.05, "{density}");
+        assert_eq!(pts, poisson_disk([100.0, 60.0], 3.0, 9));
+    }
+
+    #[test]
+    fn periodic_tile_respects_radius_across_copies() {
+        let tile = poisson_tile(30.0, 2.5, 4);
+        let mut all = Vec::new();
+        for ty in 0..2 {
+            for tx in 0..2 {
+                all.extend(
+                    tile.iter()
+                        .map(|&p| p + Vec2::new(tx as f32, ty as f32) * 30.0),
+                );
+            }
+        }
+        assert!(min_distance(&all) >= 2.5 * 0.9999);
+    }
+
+    #[test]
+    fn fixed_trees_block_neighbours() {
+        let t = Terrain::flat([50.0, 50.0], 0.0);
+        let fixed = TreeInstance {
+            position: Vec3::new(25.0, 0.0, 25.0),
+            height: 5.0,
+            rotation: 0.0,
+            species: 1,
+        };
+        let layout = SpeciesLayout {
+            species: 0,
+            height_m: [3.0, 4.0],
+            density: Density::PerHectare(2000.0),
+        };
+        let placed = place_trees(&t, &[layout], &Placement::default(), &[fixed]).unwrap();
+        assert_eq!(placed.trees[0], fixed);
+        let r = placed.min_spacing_m;
+        assert!(
+            placed.trees[1..]
+                .iter()
+                .all(|p| p.position.distance(fixed.position) >= r)
+        );
+    }
+}

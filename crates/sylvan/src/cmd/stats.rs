@@ -1,0 +1,99 @@
+//! The JSON shape shared by `render --stats` and `bench --json` (DESIGN.md contract).
+
+use serde::Serialize;
+use std::collections::BTreeMap;
+use sylvan_render::FrameStats;
+
+/// `frame_ms` summary.
+#[derive(Serialize, Debug, Clone, Copy)]
+pub struct Summary {
+    pub median: f64,
+    pub p95: f64,
+    pub min: f64,
+    pub max: f64,
+}
+
+impl Summary {
+    /// Summarises samples (nearest-rank percentiles).
+    pub fn of(samples: &[f64]) -> Self {
+        let mut s = samples.to_vec();
+        s.sort_by(f64::total_cmp);
+        let rank = |q: f64| s[((q * s.len() as f64).ceil() as usize).clamp(1, s.len()) - 1];
+        let median = if s.len() % 2 == 1 {
+            s[s.len() / 2]
+        } else {
+            0.5 * (s[s.len() / 2 - 1] + s[s.len() / 2])
+        };
+        Self {
+            median,
+            p95: rank(0.95),
+            min: s[0],
+            max: s[s.len() - 1],
+        }
+    }
+}
+
+/// One JSON object describing frames of one technique on one scene.
+#[derive(Serialize, Debug)]
+pub struct Report {
+    pub technique: String,
+    pub frames: usize,
+    pub size: [u32; 2],
+    pub spp: u32,
+    pub frame_ms: Summary,
+    pub timer: &'static str,
+    pub trees_total: usize,
+    pub trees_drawn: BTreeMap<String, u32>,
+    pub triangles: u64,
+    pub shadow_triangles: u64,
+    pub draw_calls: u32,
+    pub baked_bytes: u64,
+    pub gpu_bytes: u64,
+    pub bake_ms: f64,
+    pub adapter: String,
+}
+
+impl Report {
+    /// Builds a report from per-frame stats (the last frame's counts, all frames' times).
+    pub fn new(
+        technique: &str,
+        size: [u32; 2],
+        spp: u32,
+        frames: &[FrameStats],
+        bake_ms: f64,
+        adapter: String,
+    ) -> Self {
+        let last = frames.last().cloned().expect("at least one frame");
+        let times: Vec<f64> = frames.iter().map(|f| f.frame_ms).collect();
+        Self {
+            technique: technique.to_string(),
+            frames: frames.len(),
+            size,
+            spp,
+            frame_ms: Summary::of(&times),
+            timer: last.timer.as_str(),
+            trees_total: last.trees_total,
+            trees_drawn: last.trees_drawn,
+            triangles: last.triangles,
+            shadow_triangles: last.shadow_triangles,
+            draw_calls: last.draw_calls,
+            baked_bytes: last.asset_bytes,
+            gpu_bytes: last.gpu_bytes,
+            bake_ms,
+            adapter,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Summary;
+
+    #[test]
+    fn summary_percentiles() {
+        let s = Summary::of(&[5.0, 1.0, 3.0, 2.0, 4.0]);
+        assert_eq!((s.median, s.min, s.max, s.p95), (3.0, 1.0, 5.0, 5.0));
+        let s = Summary::of(&(1..=100).map(f64::from).collect::<Vec<_>>());
+        assert_eq!((s.median, s.p95), (50.5, 95.0));
+    }
+}
