@@ -8,7 +8,7 @@
 //! `F(l)` draws an internode (default `step:`), `f(l)` moves, `!(w)` sets the diameter (`!`
 //! alone multiplies it by `taper:`), `'(i)` sets the colour index (`'` alone increments it),
 //! `~(s)` places a leaf of length `s` (default `leaf:`), `%` cuts the rest of the branch,
-//! `[`/`]` push/pop. Other letters and digits draw nothing. With `tropism:` each `F` bends H
+//! `[`/`]` push/pop. An `F` thinner than `twig:` moves without drawing. Other letters and digits draw nothing. With `tropism:` each `F` bends H
 //! towards T by e·|H × T| (ABOP §2.3).
 
 use crate::PlantError;
@@ -220,7 +220,14 @@ pub fn interpret(ls: &LSystem, w: &Word) -> Result<Interpretation, PlantError> {
             b'F' => {
                 let len = a0.unwrap_or(ls.step);
                 if len.abs() > 1e-9 {
-                    draw(&mut out, &mut st, &rec, len);
+                    if st.width < ls.twig {
+                        // Thinner than `twig:`: move without drawing (like `f`).
+                        st.pos += st.h * len;
+                        st.chain = u32::MAX;
+                        st.lchain = u32::MAX;
+                    } else {
+                        draw(&mut out, &mut st, &rec, len);
+                    }
                     if let Some((t, e)) = tropism {
                         let axis = st.h.cross(t);
                         let a = e * axis.length();

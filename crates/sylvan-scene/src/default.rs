@@ -76,7 +76,7 @@ impl Camera {
 pub const BUILTIN_SIZE_M: f32 = 1280.0;
 
 impl Scene {
-    /// The built-in scene: about 12,000 trees (pine, prunus and bush presets, in groves with
+    /// The built-in scene: about 6,500 trees (pine, prunus and bush presets, in groves with
     /// clearings; pines favour the heights, prunus the valleys) on 1.28 km × 1.28 km of
     /// procedural hills with 110 m relief, the sun 40° high, and [`Camera::overview`].
     /// Needs no files; deterministic.
@@ -171,15 +171,15 @@ fn builtin_density_maps(terrain: &Terrain) -> (Density, Density, Density) {
     (
         Density::Map {
             map: map(pine),
-            max_per_ha: 80.0,
+            max_per_ha: 36.0,
         },
         Density::Map {
             map: map(prunus),
-            max_per_ha: 75.0,
+            max_per_ha: 32.0,
         },
         Density::Map {
             map: map(bush),
-            max_per_ha: 25.0,
+            max_per_ha: 12.0,
         },
     )
 }

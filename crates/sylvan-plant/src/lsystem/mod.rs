@@ -214,6 +214,10 @@ pub struct LSystem {
     pub leaf_size: f64,
     /// `leaves:` the leaf texture kind.
     pub leaf_kind: LeafKind,
+    /// `twig:` thinnest branch diameter drawn as wood, metres (default 0: all). An `F` whose
+    /// diameter is below it moves the turtle without drawing (leaf cards carry such twigs in
+    /// their texture) and is not counted as an internode.
+    pub twig: f64,
     /// `seed:` for stochastic productions (default 0).
     pub seed: u64,
     /// `limit:` most modules a derived string may hold (default [`DEFAULT_LIMIT`]).

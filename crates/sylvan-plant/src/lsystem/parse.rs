@@ -10,7 +10,7 @@ use super::{
 use crate::PlantError;
 use crate::error::Pos;
 
-const KEYS: &str = "name, iterations, angle, step, width, taper, leaf, leaves, seed, limit, \
+const KEYS: &str = "name, iterations, angle, step, width, taper, leaf, leaves, twig, seed, limit, \
                     tropism, ignore, define, axiom";
 
 fn to_err(file: &str, e: ParseError) -> PlantError {
@@ -50,6 +50,7 @@ pub(super) fn parse(src: &str, file: &str) -> Result<LSystem, PlantError> {
         taper: 0.7,
         leaf_size: f64::NAN,
         leaf_kind: LeafKind::Broadleaf,
+        twig: 0.0,
         seed: 0,
         limit: DEFAULT_LIMIT,
         tropism: None,
@@ -140,6 +141,16 @@ pub(super) fn parse(src: &str, file: &str) -> Result<LSystem, PlantError> {
                     "leaf" => ls.leaf_size = v,
                     _ => ls.taper = v,
                 }
+            }
+            "twig" => {
+                let v = num(&mut c)?;
+                if !(v >= 0.0) {
+                    return Err(bad(
+                        "twig must be zero or positive",
+                        "give the thinnest diameter drawn as wood, e.g. `twig: 0.02`",
+                    ));
+                }
+                ls.twig = v;
             }
             "seed" => {
                 let v = num(&mut c)?;

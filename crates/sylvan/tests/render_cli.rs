@@ -1,0 +1,225 @@
+//! `sylvan render` / `sylvan bench` end to end: the stats contract with real values, and every
+//! kind of bad input answered by one `error:` line (file:line:col where it applies), no panic.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn sylvan(args: &[&str], dir: &Path) -> Output {
+    let xdg = std::env::temp_dir().join("sylvan-test-xdg");
+    std::fs::create_dir_all(&xdg).unwrap();
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(&xdg, std::fs::Permissions::from_mode(0o700)).unwrap();
+    }
+    Command::new(env!("CARGO_BIN_EXE_sylvan"))
+        .args(args)
+        .current_dir(dir)
+        .env("XDG_RUNTIME_DIR", xdg)
+        .output()
+        .expect("run sylvan")
+}
+
+fn workdir(name: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+const TINY: &str = r#"
+[terrain]
+procedural = { seed = 3, size_m = 60, relief_m = 6 }
+
+[[species]]
+name = "bush"
+preset = "bush"
+positions = "stand.csv"
+height_m = [2, 3]
+
+[camera]
+position = [5, 8, 5]
+look_at = [30, 1, 30]
+fov_deg = 50
+"#;
+
+fn tiny_scene(dir: &Path) -> PathBuf {
+    std::fs::write(dir.join("stand.csv"), "x,y\n20,20\n30,28\n25,35\n").unwrap();
+    let p = dir.join("tiny.toml");
+    std::fs::write(&p, TINY).unwrap();
+    p
+}
+
+/// Asserts failure with exactly one `error: ` line on stderr containing every `needle`.
+fn assert_one_line_error(out: &Output, needles: &[&str]) {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success(),
+        "expected failure, got success; stderr: {stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "panicked: {stderr}");
+    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "expected one line, got: {stderr}");
+    assert!(lines[0].starts_with("error: "), "{}", lines[0]);
+    for n in needles {
+        assert!(lines[0].contains(n), "'{}' missing from: {}", n, lines[0]);
+    }
+}
+
+#[test]
+fn render_writes_png_and_stats_with_real_values() {
+    let dir = workdir("render_stats");
+    let scene = tiny_scene(&dir);
+    let out = sylvan(
+        &[
+            "render",
+            scene.to_str().unwrap(),
+            "--size",
+            "96x64",
+            "--out",
+            "f.png",
+            "--stats",
+            "s.json",
+        ],
+        &dir,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let img = image::open(dir.join("f.png")).expect("png").into_rgb8();
+    assert_eq!(img.dimensions(), (96, 64));
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("s.json")).unwrap()).unwrap();
+    for key in ["median", "p95", "min", "max"] {
+        assert!(s["frame_ms"][key].as_f64().unwrap() > 0.0, "frame_ms.{key}");
+    }
+    // lavapipe and every real GPU Sylvan targets have timestamp queries.
+    assert_eq!(s["timer"], "gpu");
+    assert_eq!(s["trees_total"], 3);
+    assert!(s["trees_drawn"]["geometry"].as_u64().unwrap() >= 1);
+    assert!(s["triangles"].as_u64().unwrap() > 1000);
+    assert!(s["draw_calls"].as_u64().unwrap() >= 4);
+    assert!(s["baked_bytes"].as_u64().unwrap() > 0);
+    assert!(s["bake_ms"].as_f64().unwrap() >= 0.0);
+    assert!(!s["adapter"].as_str().unwrap().is_empty());
+}
+
+#[test]
+fn bench_prints_one_json_object() {
+    let dir = workdir("bench_json");
+    let scene = tiny_scene(&dir);
+    let out = sylvan(
+        &[
+            "bench",
+            scene.to_str().unwrap(),
+            "--size",
+            "64x48",
+            "--frames",
+            "3",
+            "--json",
+        ],
+        &dir,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(stdout.trim().lines().count(), 1, "{stdout}");
+    let s: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
+    assert_eq!(s["frames"], 3);
+    let f = &s["frame_ms"];
+    let (min, med, p95, max) = (
+        f["min"].as_f64().unwrap(),
+        f["median"].as_f64().unwrap(),
+        f["p95"].as_f64().unwrap(),
+        f["max"].as_f64().unwrap(),
+    );
+    assert!(0.0 < min && min <= med && med <= p95 && p95 <= max, "{f}");
+    for key in [
+        "timer",
+        "trees_total",
+        "trees_drawn",
+        "triangles",
+        "draw_calls",
+        "baked_bytes",
+        "bake_ms",
+        "adapter",
+    ] {
+        assert!(!s[key].is_null(), "{key} missing");
+    }
+}
+
+#[test]
+fn bad_flags_give_one_line_errors() {
+    let dir = workdir("bad_flags");
+    let scene = tiny_scene(&dir);
+    let scene = scene.to_str().unwrap();
+    assert_one_line_error(
+        &sylvan(&["render", scene, "--size", "0x0"], &dir),
+        &["--size 0x0"],
+    );
+    assert_one_line_error(
+        &sylvan(&["render", scene, "--size", "big"], &dir),
+        &["--size big"],
+    );
+    assert_one_line_error(
+        &sylvan(&["render", scene, "--technique", "nerf"], &dir),
+        &["unknown technique 'nerf'", "geometry"],
+    );
+    assert_one_line_error(
+        &sylvan(&["render", scene, "--spp", "3"], &dir),
+        &["--spp 3", "perfect square"],
+    );
+    assert_one_line_error(
+        &sylvan(&["render", scene, "--camera", "1,2:3"], &dir),
+        &["--camera"],
+    );
+    assert_one_line_error(&sylvan(&["render", scene, "--sun", "40"], &dir), &["--sun"]);
+    assert_one_line_error(
+        &sylvan(&["bench", scene, "--frames", "0"], &dir),
+        &["--frames 0"],
+    );
+}
+
+#[test]
+fn bad_scene_files_give_file_line_col() {
+    let dir = workdir("bad_scenes");
+    tiny_scene(&dir);
+    let cases: Vec<(&str, String, Vec<&str>)> = vec![
+        ("missing.toml", String::new(), vec!["missing.toml"]),
+        (
+            "malformed.toml",
+            "[terrain\nprocedural = 3\n".into(),
+            vec!["malformed.toml:1:"],
+        ),
+        (
+            "negative.toml",
+            TINY.replace("positions = \"stand.csv\"", "density_per_ha = -5"),
+            vec!["negative.toml:8:18"],
+        ),
+        (
+            "heightmap.toml",
+            "[terrain]\nheightmap = \"notes.txt\"\nsize_m = [100, 100]\nheight_m = [0, 10]\n"
+                .into(),
+            vec!["notes.txt"],
+        ),
+        (
+            "badcsv.toml",
+            TINY.replace("stand.csv", "bad.csv"),
+            vec!["bad.csv:3:"],
+        ),
+    ];
+    std::fs::write(dir.join("notes.txt"), "this is not an image").unwrap();
+    std::fs::write(dir.join("bad.csv"), "x,y\n10,10\n12,abc\n").unwrap();
+    for (name, text, needles) in cases {
+        if !text.is_empty() {
+            std::fs::write(dir.join(name), text).unwrap();
+        }
+        let out = sylvan(&["render", name, "--size", "32x32"], &dir);
+        assert_one_line_error(&out, &needles);
+    }
+}
