@@ -1,7 +1,9 @@
-//! Built-in plants, written as `.lsys` files under `assets/plants/` and compiled in:
-//! `pine` (conifer with whorls of needle-covered branches; MNP01 §7's pine: ~30 main branches,
-//! ~300 boughs, ~30,000 needles drawn as needle-tuft quads), `prunus` (broad-leaved, MNP01's
-//! test tree) and `bush` (low and round).
+//! Built-in plants, written as `.lsys` files under `assets/plants/` and compiled in, sized for
+//! forests on a software rasteriser (leaf cards carrying many leaves in their texture, wood only
+//! for trunk and thick branches): `pine` (conical conifer, 13 whorls of drooping branches
+//! covered with needle-spray cards, ≤ 6,000 triangles), `prunus` (broad rounded crown on a
+//! short trunk, MNP01's test tree, leaf-cluster cards, ≤ 8,000) and `bush` (low and round,
+//! ≤ 2,500).
 
 /// Preset names.
 pub const PRESETS: [&str; 3] = ["pine", "prunus", "bush"];

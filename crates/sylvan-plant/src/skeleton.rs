@@ -61,27 +61,32 @@ pub struct Skeleton {
 /// Width/length ratio of leaf quads per leaf kind.
 pub fn leaf_aspect(kind: crate::lsystem::LeafKind) -> f32 {
     match kind {
-        crate::lsystem::LeafKind::Broadleaf => 0.55,
-        crate::lsystem::LeafKind::Needles => 0.9,
+        // Leaf-cluster card: square.
+        crate::lsystem::LeafKind::Broadleaf => 1.0,
+        // Needle-shoot spray card: longer than wide.
+        crate::lsystem::LeafKind::Needles => 0.7,
     }
 }
 
-/// Linear-RGB bark colours by colour index.
+/// Linear-RGB bark colours by colour index (`'`).
 pub const WOOD_PALETTE: [[f32; 3]; 6] = [
     [0.100, 0.066, 0.042], // 0 brown bark
-    [0.085, 0.072, 0.060], // 1 grey-brown bark (prunus)
-    [0.150, 0.072, 0.038], // 2 red-brown pine bark
+    [0.062, 0.052, 0.044], // 1 dark grey-brown bark (prunus)
+    [0.105, 0.074, 0.060], // 2 reddish grey-brown pine bark
     [0.120, 0.100, 0.048], // 3 young shoot
-    [0.050, 0.036, 0.026], // 4 dark bark
+    [0.050, 0.036, 0.026], // 4 dark bark (bush)
     [0.180, 0.150, 0.110], // 5 pale bark
 ];
 
-/// Linear-RGB leaf tints by colour index (they multiply the leaf texture).
-pub const LEAF_PALETTE: [[f32; 3]; 4] = [
+/// Linear-RGB leaf tints by colour index (they multiply the leaf texture). The same index
+/// selects the bark colour above, so one `'` at the base of a plant picks both.
+pub const LEAF_PALETTE: [[f32; 3]; 6] = [
     [1.00, 1.00, 1.00], // 0 as textured
-    [0.80, 0.92, 0.70], // 1 fresh, lighter
-    [1.10, 0.95, 0.55], // 2 yellowing
-    [0.70, 0.78, 0.72], // 3 shaded, darker
+    [1.00, 1.00, 1.00], // 1 as textured (prunus)
+    [0.94, 1.00, 1.02], // 2 conifer, a little bluer (pine)
+    [0.80, 0.92, 0.70], // 3 fresh, lighter
+    [0.90, 0.96, 0.88], // 4 deep green (bush)
+    [1.10, 0.95, 0.55], // 5 yellowing
 ];
 
 fn palette(p: &[[f32; 3]], i: u8) -> [f32; 3] {
@@ -172,9 +177,17 @@ pub fn mesh_leaves(leaves: &[LeafFrame], aspect: f32, tint_seed: u64) -> Mesh {
         ];
         let uvs = [[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]];
         let t = palette(&LEAF_PALETTE, l.color);
-        let k = 0.88
-            + 0.24 * crate::rng::hash01(tint_seed ^ (i as u64).wrapping_mul(0x9e37_79b9)) as f32;
-        let col = [t[0] * k, t[1] * k, t[2] * k];
+        // Per-card variation: brightness ±12 %, and a slight shift towards yellow or blue.
+        let h = |salt: u64| {
+            crate::rng::hash01(tint_seed ^ (i as u64).wrapping_mul(0x9e37_79b9) ^ salt) as f32
+        };
+        let k = 0.88 + 0.24 * h(0);
+        let hue = h(0x5bd1_e995) - 0.5;
+        let col = [
+            t[0] * k * (1.0 + 0.16 * hue),
+            t[1] * k,
+            t[2] * k * (1.0 - 0.2 * hue),
+        ];
         // Order the corners so that the front face (counter-clockwise) faces `normal`.
         let ccw = (corners[1] - corners[0])
             .cross(corners[2] - corners[0])

@@ -1,11 +1,22 @@
-//! Procedural leaf textures (pure CPU): a broad serrated leaf with a green gradient, midrib and
-//! lateral veins (prunus, bush), and a needle-covered shoot (pine). RGBA8, sRGB colour,
-//! straight alpha used as a cut-out mask; transparent texels carry the nearby leaf colour so
-//! that filtering does not darken edges. The leaf base (petiole) is at the bottom edge (v = 1)
-//! and the tip at the top (v = 0), matching the leaf quads of `skeleton::mesh_leaves`.
+//! Procedural leaf-card textures (pure CPU). Each card carries many leaves or needles, so that a
+//! crown is made of few, large cards instead of one quad per leaf:
+//!
+//! * `broadleaf` (prunus, bush): a leaf cluster — a short twig up the middle with nine
+//!   serrated, elliptic-acuminate leaves on petioles, each with its own shade of green;
+//! * `needles` (pine): a needle-covered shoot spray — a twig with side shoots, every shoot
+//!   densely set with dark blue-green needles, the outline tapering to the tip like a
+//!   spruce or pine branchlet seen from above.
+//!
+//! RGBA8, sRGB colour, straight alpha used as a cut-out mask (the renderer tests α ≥ 0.5);
+//! the cards are 50–60 % opaque so that a crown of them reads as a mostly closed mass.
+//! Transparent texels carry the mean leaf colour so that filtering does not darken edges. The
+//! card base (twig end) is at the bottom edge (v = 1) and the tip at the top (v = 0), matching
+//! the leaf quads of `skeleton::mesh_leaves`; [`crate::skeleton::leaf_aspect`] gives the
+//! card's width/length ratio, which the textures are drawn for.
 
 use crate::lsystem::LeafKind;
 use crate::mesh::LeafTexture;
+use crate::rng::hash01;
 
 /// Side of the generated square textures, pixels.
 pub const LEAF_TEXTURE_SIZE: u32 = 256;
@@ -18,6 +29,12 @@ pub fn leaf_texture(kind: LeafKind) -> LeafTexture {
     }
 }
 
+/// Fraction of texels with alpha ≥ 0.5 (what the renderer's alpha test keeps).
+pub fn coverage(t: &LeafTexture) -> f32 {
+    let n = t.rgba.chunks_exact(4).filter(|p| p[3] >= 128).count();
+    n as f32 / (t.width * t.height).max(1) as f32
+}
+
 fn lerp3(a: [f32; 3], b: [f32; 3], t: f32) -> [f32; 3] {
     let t = t.clamp(0.0, 1.0);
     [
@@ -27,127 +44,340 @@ fn lerp3(a: [f32; 3], b: [f32; 3], t: f32) -> [f32; 3] {
     ]
 }
 
-fn put(rgba: &mut [u8], i: usize, c: [f32; 3], a: f32) {
-    rgba[i * 4] = (c[0].clamp(0.0, 1.0) * 255.0).round() as u8;
-    rgba[i * 4 + 1] = (c[1].clamp(0.0, 1.0) * 255.0).round() as u8;
-    rgba[i * 4 + 2] = (c[2].clamp(0.0, 1.0) * 255.0).round() as u8;
-    rgba[i * 4 + 3] = (a.clamp(0.0, 1.0) * 255.0).round() as u8;
+fn scale3(a: [f32; 3], k: f32) -> [f32; 3] {
+    [a[0] * k, a[1] * k, a[2] * k]
 }
 
-/// A broad, serrated, elliptic-acuminate leaf (prunus-like), petiole at the bottom.
-fn broadleaf(n: u32) -> LeafTexture {
-    let mut rgba = vec![0u8; (n * n * 4) as usize];
-    let dark = [0.20, 0.36, 0.10]; // sRGB
-    let light = [0.42, 0.60, 0.20];
-    let vein = [0.60, 0.72, 0.36];
-    for y in 0..n {
-        for x in 0..n {
-            let t = 1.0 - (y as f32 + 0.5) / n as f32; // 0 base .. 1 tip
-            let dx = ((x as f32 + 0.5) / n as f32 - 0.5).abs();
-            let px = 1.0 / n as f32;
-            let (inside, col) = if t < 0.1 {
-                // Petiole.
-                (0.012 - dx, lerp3(vein, dark, 0.3))
-            } else {
-                let s = (t - 0.1) / 0.88;
-                let w = if s >= 1.0 {
-                    0.0
-                } else {
-                    0.44 * (std::f32::consts::PI * s.powf(0.8)).sin().powf(0.9)
-                };
-                // Teeth pointing to the tip.
-                let tooth = 1.0 - 0.09 * (s * 22.0).fract();
-                let edge = w * tooth;
-                let g = 1.0 - (dx / w.max(1e-3)).min(1.0);
-                let mut c = lerp3(dark, light, 0.25 + 0.55 * g + 0.2 * s);
-                // Midrib and lateral veins running up and out.
-                let lateral = ((s * 9.0 - dx * 7.0).fract() - 0.5).abs() < 0.05 && dx < edge * 0.85;
-                if dx < 0.006 + 0.006 * (1.0 - s) {
-                    c = vein;
-                } else if lateral {
-                    c = lerp3(c, vein, 0.45);
-                }
-                (edge - dx, c)
-            };
-            let a = (inside / px + 0.5).clamp(0.0, 1.0);
-            put(&mut rgba, (y * n + x) as usize, col, a);
+/// A float RGBA canvas in card units: x ∈ [0, 1] across (scaled by the card aspect so that
+/// shapes are not stretched), t ∈ [0, 1] from the base (bottom row) to the tip (top row).
+struct Canvas {
+    n: u32,
+    aspect: f32,
+    buf: Vec<[f32; 4]>,
+}
+
+impl Canvas {
+    fn new(n: u32, aspect: f32) -> Self {
+        Canvas {
+            n,
+            aspect,
+            buf: vec![[0.0; 4]; (n * n) as usize],
         }
     }
-    LeafTexture {
-        width: n,
-        height: n,
-        rgba,
-    }
-}
 
-/// Distance from point p to segment ab.
-fn seg_dist(p: [f32; 2], a: [f32; 2], b: [f32; 2]) -> (f32, f32) {
-    let (vx, vy) = (b[0] - a[0], b[1] - a[1]);
-    let (wx, wy) = (p[0] - a[0], p[1] - a[1]);
-    let t = ((wx * vx + wy * vy) / (vx * vx + vy * vy).max(1e-12)).clamp(0.0, 1.0);
-    let (dx, dy) = (wx - vx * t, wy - vy * t);
-    ((dx * dx + dy * dy).sqrt(), t)
-}
-
-/// A pine shoot: a twig up the middle with needles along it, angled up and out.
-fn needles(n: u32) -> LeafTexture {
-    let mut rgba = vec![0u8; (n * n * 4) as usize];
-    let base = [0.16, 0.30, 0.12]; // sRGB, dark pine green
-    let tip = [0.30, 0.46, 0.20];
-    let twig = [0.40, 0.30, 0.18];
-    // Needle segments in texture units (x right, t up from the base).
-    let mut segs: Vec<([f32; 2], [f32; 2], u32)> = Vec::new();
-    segs.push(([0.5, 0.0], [0.5, 0.94], 0));
-    let count = 20;
-    for k in 0..count {
-        let t = 0.04 + 0.9 * k as f32 / count as f32;
-        let side = if k % 2 == 0 { 1.0 } else { -1.0 };
-        let jitter = crate::rng::hash01(k as u64 + 11) as f32;
-        let ang = (38.0 + 22.0 * jitter).to_radians();
-        let len = 0.40 * (1.0 - 0.55 * t) + 0.05 * jitter;
-        let a = [0.5, t];
-        let b = [0.5 + side * ang.sin() * len, t + ang.cos() * len];
-        segs.push((a, b, 1));
-        // A second needle of the fascicle, slightly off.
-        let ang2 = ang - 0.25;
-        let b2 = [
-            0.5 + side * ang2.sin() * len * 0.9,
-            t + ang2.cos() * len * 0.9,
-        ];
-        segs.push((a, b2, 1));
+    /// Metric position of texel (x, y): (across in card lengths, up in card lengths).
+    fn pos(&self, x: u32, y: u32) -> [f32; 2] {
+        let n = self.n as f32;
+        [
+            ((x as f32 + 0.5) / n - 0.5) * self.aspect,
+            1.0 - (y as f32 + 0.5) / n,
+        ]
     }
-    let px = 1.0 / n as f32;
-    for y in 0..n {
-        for x in 0..n {
-            let p = [
-                (x as f32 + 0.5) / n as f32,
-                1.0 - (y as f32 + 0.5) / n as f32,
-            ];
-            let mut best_a = 0.0f32;
-            let mut col = base;
-            for (a, b, kind) in &segs {
-                let (d, t) = seg_dist(p, *a, *b);
-                let half = if *kind == 0 {
-                    0.010 * (1.0 - 0.6 * p[1])
-                } else {
-                    0.0055 * (1.0 - 0.5 * t)
-                };
-                let cov = ((half - d) / px + 0.5).clamp(0.0, 1.0);
-                if cov > best_a {
-                    best_a = cov;
-                    col = if *kind == 0 {
-                        twig
-                    } else {
-                        lerp3(base, tip, t * 0.8 + 0.2 * p[1])
-                    };
-                }
+
+    /// Texel range covering metric box [lo, hi] (with a margin of one texel).
+    fn range(&self, lo: [f32; 2], hi: [f32; 2]) -> (u32, u32, u32, u32) {
+        let n = self.n as f32;
+        let fx = |u: f32| ((u / self.aspect + 0.5) * n).floor();
+        let fy = |t: f32| ((1.0 - t) * n).floor();
+        let c = |v: f32| v.clamp(0.0, n - 1.0) as u32;
+        (
+            c(fx(lo[0]) - 1.0),
+            c(fx(hi[0]) + 1.0),
+            c(fy(hi[1]) - 1.0),
+            c(fy(lo[1]) + 1.0),
+        )
+    }
+
+    /// One texel's size in card lengths.
+    fn texel(&self) -> f32 {
+        1.0 / self.n as f32
+    }
+
+    /// Composites colour `c` with coverage `a` over texel (x, y).
+    fn over(&mut self, x: u32, y: u32, c: [f32; 3], a: f32) {
+        if a <= 0.0 {
+            return;
+        }
+        let p = &mut self.buf[(y * self.n + x) as usize];
+        let na = a + p[3] * (1.0 - a);
+        for k in 0..3 {
+            p[k] = (c[k] * a + p[k] * p[3] * (1.0 - a)) / na.max(1e-6);
+        }
+        p[3] = na;
+    }
+
+    /// A line from a to b with half-width tapering from `h0` to `h1`, colour from `c0` to `c1`.
+    fn stroke(&mut self, a: [f32; 2], b: [f32; 2], h0: f32, h1: f32, c0: [f32; 3], c1: [f32; 3]) {
+        let hmax = h0.max(h1);
+        let lo = [a[0].min(b[0]) - hmax, a[1].min(b[1]) - hmax];
+        let hi = [a[0].max(b[0]) + hmax, a[1].max(b[1]) + hmax];
+        let (x0, x1, y0, y1) = self.range(lo, hi);
+        let tx = self.texel();
+        let (vx, vy) = (b[0] - a[0], b[1] - a[1]);
+        let len2 = (vx * vx + vy * vy).max(1e-12);
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                let p = self.pos(x, y);
+                let (wx, wy) = (p[0] - a[0], p[1] - a[1]);
+                let s = ((wx * vx + wy * vy) / len2).clamp(0.0, 1.0);
+                let (dx, dy) = (wx - vx * s, wy - vy * s);
+                let d = (dx * dx + dy * dy).sqrt();
+                let h = h0 + (h1 - h0) * s;
+                // Thin lines keep at least ~0.7 texel of coverage so that they survive.
+                let cov = ((h.max(0.35 * tx) - d) / tx + 0.5).clamp(0.0, 1.0);
+                self.over(x, y, lerp3(c0, c1, s), cov);
             }
-            put(&mut rgba, (y * n + x) as usize, col, best_a);
         }
     }
-    LeafTexture {
-        width: n,
-        height: n,
-        rgba,
+
+    /// A leaf blade from `base` towards `dir` (unit), of length `len` and greatest half-width
+    /// `half`, serrated, with a midrib and lateral veins; `col` is the blade's mean colour.
+    fn leaf(&mut self, base: [f32; 2], dir: [f32; 2], len: f32, half: f32, col: [f32; 3]) {
+        let side = [-dir[1], dir[0]];
+        let tip = [base[0] + dir[0] * len, base[1] + dir[1] * len];
+        let r = half + 0.01;
+        let lo = [base[0].min(tip[0]) - r, base[1].min(tip[1]) - r];
+        let hi = [base[0].max(tip[0]) + r, base[1].max(tip[1]) + r];
+        let (x0, x1, y0, y1) = self.range(lo, hi);
+        let tx = self.texel();
+        let dark = scale3(col, 0.72);
+        let light = lerp3(col, [0.46, 0.58, 0.30], 0.25);
+        let vein = lerp3(col, [0.70, 0.78, 0.45], 0.45);
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                let p = self.pos(x, y);
+                let (wx, wy) = (p[0] - base[0], p[1] - base[1]);
+                let u = (wx * dir[0] + wy * dir[1]) / len; // 0 base .. 1 tip
+                let v = wx * side[0] + wy * side[1];
+                if !(0.0..=1.0).contains(&u) {
+                    continue;
+                }
+                let w = half
+                    * (std::f32::consts::PI * u.powf(0.75))
+                        .sin()
+                        .max(0.0)
+                        .powf(0.8);
+                let tooth = 1.0 - 0.08 * (u * 14.0).fract();
+                let edge = w * tooth;
+                let cov = ((edge - v.abs()) / tx + 0.5).clamp(0.0, 1.0);
+                if cov <= 0.0 {
+                    continue;
+                }
+                let g = 1.0 - (v.abs() / w.max(1e-4)).min(1.0);
+                // Lit along one half of the blade (a slight fold), darker towards the edges.
+                let mut c = lerp3(
+                    dark,
+                    light,
+                    0.3 + 0.45 * g + if v > 0.0 { 0.2 } else { 0.0 },
+                );
+                let lateral =
+                    ((u * 7.0 - v.abs() / half.max(1e-4) * 1.6).fract() - 0.5).abs() < 0.06;
+                if v.abs() < 0.004 + 0.004 * (1.0 - u) {
+                    c = vein;
+                } else if lateral && g > 0.15 {
+                    c = lerp3(c, vein, 0.35);
+                }
+                self.over(x, y, c, cov);
+            }
+        }
+    }
+
+    /// RGBA8 texture; transparent texels take the mean opaque colour.
+    fn finish(self) -> LeafTexture {
+        let mut sum = [0.0f64; 3];
+        let mut wsum = 0.0f64;
+        for p in &self.buf {
+            for k in 0..3 {
+                sum[k] += (p[k] * p[3]) as f64;
+            }
+            wsum += p[3] as f64;
+        }
+        let mean = if wsum > 0.0 {
+            [
+                (sum[0] / wsum) as f32,
+                (sum[1] / wsum) as f32,
+                (sum[2] / wsum) as f32,
+            ]
+        } else {
+            [0.0; 3]
+        };
+        let mut rgba = Vec::with_capacity(self.buf.len() * 4);
+        for p in &self.buf {
+            let c = if p[3] > 0.0 {
+                lerp3(mean, [p[0], p[1], p[2]], (p[3] * 4.0).min(1.0))
+            } else {
+                mean
+            };
+            for k in c {
+                rgba.push((k.clamp(0.0, 1.0) * 255.0).round() as u8);
+            }
+            rgba.push((p[3].clamp(0.0, 1.0) * 255.0).round() as u8);
+        }
+        LeafTexture {
+            width: self.n,
+            height: self.n,
+            rgba,
+        }
+    }
+}
+
+fn rotate2(d: [f32; 2], deg: f32) -> [f32; 2] {
+    let (s, c) = deg.to_radians().sin_cos();
+    [d[0] * c - d[1] * s, d[0] * s + d[1] * c]
+}
+
+/// A cluster of nine prunus-like leaves on a twig (card aspect 1).
+fn broadleaf(n: u32) -> LeafTexture {
+    let aspect = crate::skeleton::leaf_aspect(LeafKind::Broadleaf);
+    let mut cv = Canvas::new(n, aspect);
+    let twig = [0.30, 0.24, 0.17]; // sRGB
+    let greens = [
+        [0.21, 0.35, 0.13],
+        [0.25, 0.39, 0.15],
+        [0.18, 0.31, 0.12],
+        [0.27, 0.41, 0.17],
+        [0.22, 0.37, 0.15],
+    ];
+    // The twig: up the middle, slightly curved.
+    let axis = |t: f32| [0.03 * (t * 3.0).sin(), t];
+    for k in 0..8 {
+        let (t0, t1) = (k as f32 * 0.07, (k + 1) as f32 * 0.07);
+        cv.stroke(
+            axis(t0),
+            axis(t1),
+            0.009 - 0.0008 * k as f32,
+            0.009 - 0.0008 * (k + 1) as f32,
+            twig,
+            twig,
+        );
+    }
+    // Leaves: (position along the twig, side, angle from the twig in degrees, length).
+    // Lower leaves are drawn first, so upper ones overlap them as on a real shoot.
+    let leaves: [(f32, f32, f32, f32); 9] = [
+        (0.06, -1.0, 62.0, 0.40),
+        (0.10, 1.0, 58.0, 0.42),
+        (0.20, -1.0, 48.0, 0.44),
+        (0.26, 1.0, 44.0, 0.44),
+        (0.36, -1.0, 36.0, 0.42),
+        (0.42, 1.0, 30.0, 0.40),
+        (0.50, -1.0, 18.0, 0.38),
+        (0.54, 1.0, 12.0, 0.37),
+        (0.56, 0.0, 0.0, 0.42),
+    ];
+    for (i, &(t, side, ang, len)) in leaves.iter().enumerate() {
+        let j = hash01(i as u64 * 7 + 3) as f32;
+        let a = axis(t);
+        let dir = rotate2([0.0, 1.0], -side * (ang + 8.0 * (j - 0.5)));
+        // A short petiole, then the blade.
+        let pet = 0.035;
+        let b = [a[0] + dir[0] * pet, a[1] + dir[1] * pet];
+        cv.stroke(a, b, 0.004, 0.003, twig, lerp3(twig, greens[0], 0.5));
+        let col = scale3(greens[i % greens.len()], 0.92 + 0.16 * j);
+        let len = len * (1.0 + 0.12 * j);
+        // Keep the blade inside the card.
+        let len = len.min((0.98 - b[1]) / dir[1].max(0.3)).min(0.5);
+        cv.leaf(b, dir, len, len * 0.3, col);
+    }
+    cv.finish()
+}
+
+/// A needle-covered shoot spray with side shoots (card aspect [`leaf_aspect`]).
+///
+/// [`leaf_aspect`]: crate::skeleton::leaf_aspect
+fn needles(n: u32) -> LeafTexture {
+    let aspect = crate::skeleton::leaf_aspect(LeafKind::Needles);
+    let mut cv = Canvas::new(n, aspect);
+    let twig = [0.30, 0.22, 0.15]; // sRGB
+    let deep = [0.09, 0.18, 0.11]; // dark blue-green, inside the shoot
+    let tip = [0.19, 0.30, 0.17]; // lighter at needle tips
+    let half_w = aspect * 0.5 - 0.01;
+    // Shoots: the leader up the middle, then side shoots in opposite pairs, shorter to the tip.
+    let mut shoots: Vec<([f32; 2], [f32; 2], f32)> = vec![([0.0, 0.0], [0.0, 0.9], 1.0)];
+    for k in 0..7 {
+        let t = 0.05 + 0.115 * k as f32;
+        for side in [-1.0f32, 1.0] {
+            let j = hash01(k as u64 * 2 + (side > 0.0) as u64 + 40) as f32;
+            let ang = (56.0 + 10.0 * j - 3.0 * k as f32).to_radians();
+            let reach = (half_w - 0.05) * (1.0 - 0.62 * t) * (0.9 + 0.1 * j);
+            let len = (reach / ang.sin()).min(0.95 - t);
+            let start = [0.0, t];
+            let end = [side * ang.sin() * len, t + ang.cos() * len];
+            shoots.push((start, end, 0.8));
+        }
+    }
+    // Twigs first, needles over them.
+    for (a, b, w) in &shoots {
+        cv.stroke(*a, *b, 0.006 * w, 0.002, twig, twig);
+    }
+    let mut seed = 0u64;
+    for (a, b, w) in &shoots {
+        let (vx, vy) = (b[0] - a[0], b[1] - a[1]);
+        let len = (vx * vx + vy * vy).sqrt();
+        let dir = [vx / len, vy / len];
+        let steps = (len / 0.0065) as u32;
+        for s in 0..steps {
+            let f = (s as f32 + 0.5) / steps as f32;
+            let p = [a[0] + vx * f, a[1] + vy * f];
+            for side in [-1.0f32, 1.0] {
+                seed += 1;
+                let j = hash01(seed * 31 + 7) as f32;
+                // Needles point forward and out; shorter towards each shoot's tip.
+                let ang = side * (35.0 + 30.0 * j);
+                let nl = (0.055 + 0.04 * w) * (1.0 - 0.4 * f) * (0.8 + 0.4 * j);
+                let d = rotate2(dir, ang);
+                let e = [p[0] + d[0] * nl, p[1] + d[1] * nl];
+                let k = 0.85 + 0.3 * hash01(seed * 13 + 1) as f32;
+                cv.stroke(
+                    p,
+                    e,
+                    0.0048,
+                    0.0022,
+                    scale3(deep, k),
+                    scale3(lerp3(deep, tip, 0.8), k),
+                );
+            }
+        }
+    }
+    cv.finish()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cards_are_mostly_opaque() {
+        for kind in [LeafKind::Broadleaf, LeafKind::Needles] {
+            let t = leaf_texture(kind);
+            assert_eq!(t.rgba.len(), (t.width * t.height * 4) as usize);
+            let c = coverage(&t);
+            eprintln!("{kind:?}: coverage {c}");
+            assert!((0.45..0.85).contains(&c), "{kind:?}: coverage {c}");
+            // The edge rows stay transparent (no clamped texels smeared over the card edge).
+            let n = t.width as usize;
+            for x in 0..n {
+                assert!(t.rgba[x * 4 + 3] < 128, "{kind:?}: top row opaque at {x}");
+            }
+        }
+    }
+
+    #[test]
+    fn colours_are_green_not_brown() {
+        for kind in [LeafKind::Broadleaf, LeafKind::Needles] {
+            let t = leaf_texture(kind);
+            let (mut r, mut g, mut b, mut w) = (0.0, 0.0, 0.0, 0.0);
+            for p in t.rgba.chunks_exact(4).filter(|p| p[3] >= 128) {
+                r += p[0] as f64;
+                g += p[1] as f64;
+                b += p[2] as f64;
+                w += 1.0;
+            }
+            let (r, g, b) = (r / w, g / w, b / w);
+            assert!(g > r * 1.2 && g > b * 1.1, "{kind:?}: mean {r} {g} {b}");
+            if kind == LeafKind::Needles {
+                // Dark blue-green: darker than the broadleaf, blue close to red.
+                assert!(g < 90.0 && b > 0.6 * r, "needles mean {r} {g} {b}");
+            }
+        }
     }
 }

@@ -132,14 +132,14 @@ fn content_keys(w: &Word, share: bool) -> (Vec<u64>, HashMap<u64, u32>) {
     (keys, counts)
 }
 
-/// Sides of a chain's rings from its radius (metres): thin twigs are triangles, the trunk an
-/// octagon. Fixed per chain.
+/// Sides of a chain's rings from its radius (metres): branches are triangles or squares, the
+/// trunk a hexagon or octagon. Fixed per chain.
 fn ring_sides(r: f64) -> u8 {
-    if r >= 0.06 {
+    if r >= 0.1 {
         8
-    } else if r >= 0.03 {
+    } else if r >= 0.05 {
         6
-    } else if r >= 0.013 {
+    } else if r >= 0.03 {
         4
     } else {
         3

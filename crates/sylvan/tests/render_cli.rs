@@ -223,3 +223,26 @@ fn bad_scene_files_give_file_line_col() {
         assert_one_line_error(&out, &needles);
     }
 }
+
+#[test]
+fn no_adapter_names_the_packages_to_install() {
+    // No Metal adapter exists on Linux: the same path as a machine without any GPU driver.
+    if cfg!(target_os = "macos") {
+        return;
+    }
+    let dir = workdir("no_adapter");
+    let out = Command::new(env!("CARGO_BIN_EXE_sylvan"))
+        .arg("adapter")
+        .current_dir(&dir)
+        .env("WGPU_BACKEND", "metal")
+        .output()
+        .expect("run sylvan");
+    assert_one_line_error(
+        &out,
+        &[
+            "no GPU adapter",
+            "mesa-vulkan-drivers libvulkan1",
+            "cargo xtask",
+        ],
+    );
+}

@@ -82,6 +82,11 @@ fn pieces(m: &Mesh) -> (Vec<u32>, usize) {
     (tri_piece, label.len())
 }
 
+/// Lexicographic order of points (a tie-break independent of vertex order).
+fn before(a: &[f32; 3], b: &[f32; 3]) -> bool {
+    (a[0], a[1], a[2]) < (b[0], b[1], b[2])
+}
+
 /// A uniform grid of points for nearest-point queries.
 struct Grid {
     cell: f32,
@@ -126,7 +131,13 @@ impl Grid {
                                     continue;
                                 }
                                 let d = Vec3::from(points[i as usize]).distance_squared(q);
-                                if best.is_none_or(|(_, bd)| d < bd) {
+                                // Ties go to the lexicographically smaller point, so that the
+                                // answer does not depend on the order of the points.
+                                if best.is_none_or(|(b, bd)| {
+                                    d < bd
+                                        || (d == bd
+                                            && before(&points[i as usize], &points[b as usize]))
+                                }) {
                                     best = Some((i, d));
                                 }
                             }
@@ -193,6 +204,7 @@ pub fn build(wood: &mut Mesh, leaves: &mut Mesh) -> (Hierarchy, usize) {
         let grid = Grid::new(&wood.positions, diag / 64.0);
         // Each piece's closest other piece.
         let mut link = vec![(u32::MAX, f32::INFINITY); nw];
+        let mut link_point = vec![[f32::INFINITY; 3]; nw];
         for (v, p) in wood.positions.iter().enumerate() {
             let c = vert_piece[v];
             if c == u32::MAX {
@@ -200,9 +212,12 @@ pub fn build(wood: &mut Mesh, leaves: &mut Mesh) -> (Hierarchy, usize) {
             }
             if let Some((o, d)) = grid.nearest(&wood.positions, Vec3::from(*p), 2, |i| {
                 vert_piece[i as usize] != c && vert_piece[i as usize] != u32::MAX
-            }) && d < link[c as usize].1
+            }) && (d < link[c as usize].1
+                || (d == link[c as usize].1
+                    && before(&wood.positions[o as usize], &link_point[c as usize])))
             {
                 link[c as usize] = (vert_piece[o as usize], d);
+                link_point[c as usize] = wood.positions[o as usize];
             }
         }
         let mut adj: Vec<Vec<u32>> = vec![Vec::new(); nw];
@@ -211,6 +226,25 @@ pub fn build(wood: &mut Mesh, leaves: &mut Mesh) -> (Hierarchy, usize) {
                 adj[c].push(o);
                 adj[o as usize].push(c as u32);
             }
+        }
+        // Visit neighbours in an order given by the geometry (each piece's lexicographically
+        // smallest vertex), not by vertex order, so that re-importing an exported plant gives
+        // the same node numbering.
+        let mut piece_key = vec![[f32::INFINITY; 3]; nw];
+        for (v, p) in wood.positions.iter().enumerate() {
+            let c = vert_piece[v];
+            if c != u32::MAX && before(p, &piece_key[c as usize]) {
+                piece_key[c as usize] = *p;
+            }
+        }
+        for list in &mut adj {
+            list.sort_by(|a, b| {
+                let (ka, kb) = (piece_key[*a as usize], piece_key[*b as usize]);
+                (ka[0], ka[1], ka[2])
+                    .partial_cmp(&(kb[0], kb[1], kb[2]))
+                    .unwrap_or(std::cmp::Ordering::Equal)
+            });
+            list.dedup();
         }
         // Breadth-first from the trunk: node per piece in visiting order.
         let mut node_of = vec![u32::MAX; nw];

@@ -144,7 +144,7 @@ pub(super) fn parse(src: &str, file: &str) -> Result<LSystem, PlantError> {
             }
             "twig" => {
                 let v = num(&mut c)?;
-                if !(v >= 0.0) {
+                if v.is_nan() || v < 0.0 {
                     return Err(bad(
                         "twig must be zero or positive",
                         "give the thinnest diameter drawn as wood, e.g. `twig: 0.02`",

@@ -41,8 +41,9 @@ fn vnoise(p: vec2<f32>) -> f32 {
 fn fs_terrain(in: TerrainOut) -> @location(0) vec4<f32> {
     let n = normalize(in.normal);
     let variation = vnoise(in.world.xz * 0.02) * 0.6 + vnoise(in.world.xz * 0.11) * 0.4;
-    let grass = mix(vec3<f32>(0.060, 0.085, 0.025), vec3<f32>(0.120, 0.120, 0.045), variation);
-    let rock = vec3<f32>(0.16, 0.145, 0.13);
+    // Meadow to forest-floor tones (linear albedo), varied at two scales.
+    let grass = mix(vec3<f32>(0.040, 0.058, 0.018), vec3<f32>(0.085, 0.080, 0.036), variation);
+    let rock = vec3<f32>(0.13, 0.12, 0.105);
     let steep = smoothstep(0.72, 0.55, n.y);
     let albedo = mix(grass, rock, steep);
     let l = frame.sun_dir.xyz;
