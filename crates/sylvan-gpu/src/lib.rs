@@ -7,6 +7,7 @@
 //! Debian packages to install.
 
 mod context;
+pub mod layout;
 mod readback;
 mod resolve;
 mod target;

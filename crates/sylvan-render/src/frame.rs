@@ -2,7 +2,7 @@
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
-use sylvan_gpu::{DEPTH_FORMAT, Gpu};
+use sylvan_gpu::{DEPTH_FORMAT, Gpu, layout};
 
 /// Number of shadow cascades (matches `CASCADES` in `frame.wgsl`).
 pub const CASCADES: usize = 4;
@@ -198,19 +198,6 @@ pub struct FrameResources {
     shadow_map: wgpu::Texture,
 }
 
-fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
 impl FrameResources {
     /// Creates layouts, buffers and a `resolution²` shadow map per cascade.
     pub fn new(gpu: &Gpu, resolution: u32) -> Self {
@@ -218,28 +205,23 @@ impl FrameResources {
         let main_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("frame_main_layout"),
             entries: &[
-                uniform_entry(0),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Depth,
-                        view_dimension: wgpu::TextureViewDimension::D2Array,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 2,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
-                    count: None,
-                },
+                layout::uniform(0, wgpu::ShaderStages::VERTEX_FRAGMENT),
+                layout::texture(
+                    1,
+                    wgpu::ShaderStages::FRAGMENT,
+                    wgpu::TextureSampleType::Depth,
+                    wgpu::TextureViewDimension::D2Array,
+                ),
+                layout::sampler(
+                    2,
+                    wgpu::ShaderStages::FRAGMENT,
+                    wgpu::SamplerBindingType::Comparison,
+                ),
             ],
         });
         let shadow_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("frame_shadow_layout"),
-            entries: &[uniform_entry(0)],
+            entries: &[layout::uniform(0, wgpu::ShaderStages::VERTEX_FRAGMENT)],
         });
         let make_uniform = |label: &str| {
             device.create_buffer(&wgpu::BufferDescriptor {
