@@ -65,7 +65,17 @@ impl Gpu {
     /// Opens a device on the best adapter available (`WGPU_BACKEND` selects a backend).
     pub fn new() -> Result<Self, GpuError> {
         let desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
-        let backends = format!("{:?}", desc.backends);
+        let backends = [
+            (wgpu::Backends::VULKAN, "Vulkan"),
+            (wgpu::Backends::GL, "GL"),
+            (wgpu::Backends::METAL, "Metal"),
+            (wgpu::Backends::DX12, "DX12"),
+        ]
+        .iter()
+        .filter(|(b, _)| desc.backends.contains(*b))
+        .map(|(_, n)| *n)
+        .collect::<Vec<_>>()
+        .join(", ");
         let instance = wgpu::Instance::new(desc);
         Self::with_instance(instance, None, backends)
     }
