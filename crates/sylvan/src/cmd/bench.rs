@@ -33,10 +33,15 @@ pub fn run(args: BenchArgs) -> Result<()> {
     for _ in 0..2 {
         renderer.render(&gpu, &r.camera, &r.sun)?;
     }
+    // A frame can take seconds on a software rasteriser: show progress on a terminal
+    // (indicatif draws nothing when stderr is not one, so JSON consumers see no noise).
+    let progress = indicatif::ProgressBar::new(args.frames as u64).with_message("frames");
     let mut frames = Vec::with_capacity(args.frames);
     for _ in 0..args.frames {
         frames.push(renderer.render(&gpu, &r.camera, &r.sun)?);
+        progress.inc(1);
     }
+    progress.finish_and_clear();
     let report = Report::new(
         r.options.technique.name(),
         [r.options.width, r.options.height],
