@@ -121,10 +121,6 @@ pub struct Cascade {
     pub view_proj: Mat4,
     /// Far view distance covered.
     pub far: f32,
-    /// Centre and half-size of the cascade's square in light space, for caster culling.
-    pub centre: Vec3,
-    /// Half-size in metres.
-    pub radius: f32,
 }
 
 /// Fits `CASCADES` shadow cascades to `view` up to `shadow_distance`, looking along `-sun`.
@@ -171,8 +167,6 @@ pub fn fit_cascades(
         Cascade {
             view_proj: proj * view_m,
             far,
-            centre: snapped,
-            radius,
         }
     })
 }

@@ -128,11 +128,10 @@ impl Instances {
             self.ranges[0][species] = start..self.staging.len() as u32;
         }
         for c in 0..CASCADES {
+            let clip = cascades.map(|all| Frustum::from_matrix(all[c].view_proj));
             for species in 0..self.species_count {
                 let start = self.staging.len() as u32;
-                if let Some(cascades) = cascades {
-                    let cas = &cascades[c];
-                    let clip = Frustum::from_matrix(cas.view_proj);
+                if let Some(clip) = &clip {
                     for p in self.placed.iter().filter(|p| p.species == species) {
                         if clip.intersects_sphere(p.centre, p.radius) {
                             self.staging.push(p.gpu);

@@ -290,7 +290,8 @@ impl Renderer {
             });
         self.timer.begin(&mut encoder);
         let mut shadow_counts = DrawCounts::default();
-        for c in 0..CASCADES {
+        // With shadows off the maps are never sampled (`sun_dir.w` = 0): skip the passes.
+        for c in (0..CASCADES).filter(|_| shadows) {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("shadow_pass"),
                 color_attachments: &[],
@@ -306,9 +307,6 @@ impl Renderer {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            if !shadows {
-                continue;
-            }
             pass.set_bind_group(0, &self.frame.cascade_binds[c], &[]);
             shadow_counts.draw_calls += self.terrain.draw(&mut pass, true);
             shadow_counts.triangles += self.terrain.triangles();
