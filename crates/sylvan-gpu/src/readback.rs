@@ -1,17 +1,18 @@
-//! Copying a texture back to the CPU as an `image`.
+//! Reading textures back to the CPU (tests, screenshots, offline bakes).
 
 use crate::{Gpu, GpuError};
 
-/// Reads an RGBA8 (unorm or sRGB) texture's mip 0 into an image, bytes as stored.
-pub fn read_rgba8(gpu: &Gpu, texture: &wgpu::Texture) -> Result<image::RgbaImage, GpuError> {
+/// Reads `texture` (mip 0, layer 0) into tightly packed rows, for any uncompressed format.
+/// Returns `width * height * block_size` bytes.
+pub fn read_texture_bytes(gpu: &Gpu, texture: &wgpu::Texture) -> Result<Vec<u8>, GpuError> {
     let (width, height) = (texture.width(), texture.height());
     let format = texture.format();
-    if format.block_copy_size(None) != Some(4) {
-        return Err(GpuError::Wgpu(format!(
-            "read_rgba8 needs a 4-byte format, got {format:?}"
-        )));
-    }
-    let unpadded = width * 4;
+    let block = format.block_copy_size(None).ok_or_else(|| {
+        GpuError::Wgpu(format!(
+            "cannot read back {format:?}: not a plain colour format"
+        ))
+    })?;
+    let unpadded = width * block;
     let padded =
         unpadded.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
     let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
@@ -44,12 +45,24 @@ pub fn read_rgba8(gpu: &Gpu, texture: &wgpu::Texture) -> Result<image::RgbaImage
     let data = slice
         .get_mapped_range()
         .map_err(|e| GpuError::Wgpu(e.to_string()))?;
-    let mut pixels = Vec::with_capacity((unpadded * height) as usize);
+    let mut bytes = Vec::with_capacity((unpadded * height) as usize);
     for row in data.chunks(padded as usize) {
-        pixels.extend_from_slice(&row[..unpadded as usize]);
+        bytes.extend_from_slice(&row[..unpadded as usize]);
     }
     drop(data);
     buffer.unmap();
-    image::RgbaImage::from_raw(width, height, pixels)
+    Ok(bytes)
+}
+
+/// Reads a 4-byte-per-texel texture (e.g. the sRGB output target) into an RGBA image.
+pub fn read_rgba8(gpu: &Gpu, texture: &wgpu::Texture) -> Result<image::RgbaImage, GpuError> {
+    let format = texture.format();
+    if format.block_copy_size(None) != Some(4) {
+        return Err(GpuError::Wgpu(format!(
+            "read_rgba8 needs a 4-byte format, got {format:?}"
+        )));
+    }
+    let pixels = read_texture_bytes(gpu, texture)?;
+    image::RgbaImage::from_raw(texture.width(), texture.height(), pixels)
         .ok_or_else(|| GpuError::Wgpu("readback size mismatch".into()))
 }

@@ -315,3 +315,33 @@ impl FrameResources {
         s.width as u64 * s.height as u64 * s.depth_or_array_layers as u64 * 4
     }
 }
+
+/// A debug colouring of the frame (`shadow_params.z` in `frame.wgsl`), for the viewer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum DebugView {
+    /// The normal image.
+    #[default]
+    None,
+    /// Trees tinted by the technique that drew them (geometry orange), the terrain grey.
+    Technique,
+    /// Terrain and trees tinted by the shadow cascade covering them (red, green, blue, yellow).
+    Cascades,
+}
+
+impl DebugView {
+    /// Every debug view with its label, in the order of the viewer's panel.
+    pub const ALL: [(&'static str, DebugView); 3] = [
+        ("none", DebugView::None),
+        ("technique", DebugView::Technique),
+        ("shadow cascades", DebugView::Cascades),
+    ];
+
+    /// The value the shaders read from `shadow_params.z`.
+    pub fn code(self) -> f32 {
+        match self {
+            DebugView::None => 0.0,
+            DebugView::Technique => 1.0,
+            DebugView::Cascades => 2.0,
+        }
+    }
+}

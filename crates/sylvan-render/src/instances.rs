@@ -15,7 +15,8 @@ use sylvan_scene::TreeInstance;
 pub struct GpuTreeInstance {
     /// xyz: trunk base; w: uniform scale from plant units to metres.
     pub base_scale: [f32; 4],
-    /// x: cos(rotation); y: sin(rotation); z: tint seed in [0, 1); w: unused.
+    /// x: cos(rotation); y: sin(rotation); z: tint seed in [0, 1); w: presence in [0, 1]
+    /// (1 = whole; less during a level-of-detail transition).
     pub rot: [f32; 4],
 }
 
@@ -82,7 +83,7 @@ impl Instances {
                 Placed {
                     gpu: GpuTreeInstance {
                         base_scale: [t.position.x, t.position.y, t.position.z, scale],
-                        rot: [c, s, seed, 0.0],
+                        rot: [c, s, seed, 1.0],
                     },
                     centre,
                     radius,
@@ -143,6 +144,18 @@ impl Instances {
         }
         gpu.queue
             .write_buffer(&self.buffer, 0, bytemuck::cast_slice(&self.staging));
+    }
+
+    /// This frame's instances of `species` in `pass` (0 the camera, `1 + c` cascade `c`), as
+    /// uploaded.
+    pub fn records(&self, pass: usize, species: usize) -> &[GpuTreeInstance] {
+        let r = &self.ranges[pass][species];
+        &self.staging[r.start as usize..r.end as usize]
+    }
+
+    /// Number of species.
+    pub fn species_count(&self) -> usize {
+        self.species_count
     }
 
     /// The instance buffer (bind as vertex buffer slot 1).

@@ -16,6 +16,8 @@
 //! Conventions: metres, Y up, right-handed; linear HDR in the main pass (reversed-Z depth),
 //! tone-mapped to sRGB in the resolve.
 
+pub mod bake;
+pub mod directions;
 mod error;
 pub mod frame;
 pub mod instances;
@@ -27,5 +29,6 @@ mod terrain;
 pub mod texture;
 
 pub use error::RenderError;
+pub use frame::DebugView;
 pub use renderer::{FrameStats, RenderOptions, Renderer, load_plants};
 pub use technique::TechniqueKind;

@@ -35,6 +35,8 @@ pub struct PipelineSpec<'a> {
     pub cull: Option<wgpu::Face>,
     /// Whether the pipeline writes depth.
     pub depth_write: bool,
+    /// Colour blending in the main pass (`None`: replace).
+    pub blend: Option<wgpu::BlendState>,
 }
 
 /// Builds the pipeline described by `spec`.
@@ -62,7 +64,11 @@ pub fn build(gpu: &Gpu, spec: &PipelineSpec) -> wgpu::RenderPipeline {
             },
         ),
     };
-    let targets = [Some(wgpu::ColorTargetState::from(HDR_FORMAT))];
+    let targets = [Some(wgpu::ColorTargetState {
+        format: HDR_FORMAT,
+        blend: spec.blend,
+        write_mask: wgpu::ColorWrites::ALL,
+    })];
     gpu.device
         .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(spec.label),
@@ -115,5 +121,10 @@ pub fn shader_sources() -> Vec<(&'static str, String)> {
             "geometry",
             with_frame(include_str!("technique/geometry/geometry.wgsl")),
         ),
+        (
+            "boxtree",
+            with_frame(include_str!("technique/boxtree/boxtree.wgsl")),
+        ),
+        ("bake", include_str!("bake/bake.wgsl").to_string()),
     ]
 }

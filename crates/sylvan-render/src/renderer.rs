@@ -1,12 +1,14 @@
 //! The frame: culling, shadow cascades, main pass, resolve, timing.
 
 use crate::RenderError;
-use crate::frame::{self, CASCADES, FrameResources, Frustum, GpuFrame, View};
+use crate::bake::{BakeReport, CachePolicy};
+use crate::frame::{self, CASCADES, DebugView, FrameResources, Frustum, GpuFrame, View};
 use crate::instances::{Instances, SpeciesBounds};
 use crate::pipeline::HDR_FORMAT;
 use crate::sky::SkyPass;
-use crate::technique::geometry::Geometry;
-use crate::technique::{DrawContext, DrawCounts, Representation, TechniqueKind};
+use crate::technique::any::{AnyTechnique, BakeProgress};
+use crate::technique::boxtree::BoxTreeParams;
+use crate::technique::{DrawContext, DrawCounts, FrameInput, TechniqueKind};
 use crate::terrain::TerrainPass;
 use glam::{Mat4, Vec3};
 use std::collections::BTreeMap;
@@ -38,6 +40,12 @@ pub struct RenderOptions {
     pub exposure: f32,
     /// Time with the wall clock even where GPU timestamps exist.
     pub wall_timer: bool,
+    /// Debug colouring (the viewer's debug views); [`DebugView::None`] for normal images.
+    pub debug: DebugView,
+    /// Parameters of the `boxtree` technique.
+    pub boxtree: BoxTreeParams,
+    /// Where baked assets are cached.
+    pub cache: CachePolicy,
 }
 
 impl Default for RenderOptions {
@@ -52,6 +60,9 @@ impl Default for RenderOptions {
             shadow_distance: 1500.0,
             exposure: 1.0,
             wall_timer: false,
+            debug: DebugView::None,
+            boxtree: BoxTreeParams::default(),
+            cache: CachePolicy::Default,
         }
     }
 }
@@ -106,7 +117,8 @@ pub struct Renderer {
     frame: FrameResources,
     sky: SkyPass,
     terrain: TerrainPass,
-    technique: Geometry,
+    technique: AnyTechnique,
+    bake_reports: Vec<BakeReport>,
     instances: Instances,
     resolver: Resolver,
     timer: FrameTimer,
@@ -138,12 +150,24 @@ pub fn load_plants(scene: &Scene) -> Result<Vec<Plant>, RenderError> {
 }
 
 impl Renderer {
-    /// Prepares everything for `scene` drawn with `plants` (one per species).
+    /// Prepares everything for `scene` drawn with `plants` (one per species); bakes what the
+    /// technique needs (or reads it from the cache).
     pub fn new(
         gpu: &Gpu,
         scene: &Scene,
         plants: &[Plant],
         options: &RenderOptions,
+    ) -> Result<Self, RenderError> {
+        Self::with_progress(gpu, scene, plants, options, &mut |_, _, _| {})
+    }
+
+    /// [`Renderer::new`], reporting bake progress as (plant, done, total).
+    pub fn with_progress(
+        gpu: &Gpu,
+        scene: &Scene,
+        plants: &[Plant],
+        options: &RenderOptions,
+        progress: BakeProgress<'_>,
     ) -> Result<Self, RenderError> {
         if plants.len() != scene.species.len() {
             return Err(RenderError::Plant(format!(
@@ -153,16 +177,21 @@ impl Renderer {
             )));
         }
         let factor = options.factor()?;
-        if options.technique != TechniqueKind::Geometry {
-            return Err(RenderError::NotImplemented(options.technique.name()));
-        }
         let res = options
             .shadow_resolution
             .clamp(256, gpu.device.limits().max_texture_dimension_2d);
         let frame = FrameResources::new(gpu, res);
         let resolver = Resolver::new(gpu);
         let targets = Self::make_targets(gpu, &resolver, options.width, options.height, factor)?;
-        let technique = Geometry::prepare(gpu, &frame, plants)?;
+        let (technique, bake_reports) = AnyTechnique::prepare(
+            gpu,
+            &frame,
+            plants,
+            options.technique,
+            &options.boxtree,
+            &options.cache,
+            progress,
+        )?;
         let bounds: Vec<SpeciesBounds> = plants
             .iter()
             .map(|p| SpeciesBounds {
@@ -182,6 +211,7 @@ impl Renderer {
             terrain: TerrainPass::new(gpu, &frame, t),
             frame,
             technique,
+            bake_reports,
             instances,
             resolver,
             timer: FrameTimer::new(gpu, options.wall_timer),
@@ -274,6 +304,13 @@ impl Renderer {
             shadows.then_some(&cascades),
         );
 
+        let input = FrameInput {
+            eye: view.eye,
+            pixels_per_metre: self.targets.output.height as f32 / (2.0 * (view.fov_y * 0.5).tan()),
+            instances: &self.instances,
+        };
+        self.technique.update(gpu, &input)?;
+
         let raw = self.frame_uniforms(&view, view_proj, sun, sun_dir, shadows, &cascades);
         gpu.queue
             .write_buffer(&self.frame.uniforms, 0, bytemuck::bytes_of(&raw));
@@ -311,6 +348,7 @@ impl Renderer {
             shadow_counts.draw_calls += self.terrain.draw(&mut pass, true);
             shadow_counts.triangles += self.terrain.triangles();
             let ctx = DrawContext {
+                pass: 1 + c,
                 frame_bind: &self.frame.cascade_binds[c],
                 instances: &self.instances,
                 ranges: &self.instances.ranges[1 + c],
@@ -347,6 +385,7 @@ impl Renderer {
             main_counts.draw_calls += self.terrain.draw(&mut pass, false);
             main_counts.triangles += self.terrain.triangles();
             let ctx = DrawContext {
+                pass: 0,
                 frame_bind: &self.frame.main_bind,
                 instances: &self.instances,
                 ranges: &self.instances.ranges[0],
@@ -372,7 +411,10 @@ impl Renderer {
             frame_ms,
             timer: self.timer.kind(),
             trees_total: self.instances.total(),
-            trees_drawn: BTreeMap::from([(Geometry::NAME.to_string(), self.instances.drawn())]),
+            trees_drawn: BTreeMap::from([(
+                self.technique.name().to_string(),
+                self.instances.drawn(),
+            )]),
             triangles: main_counts.triangles,
             shadow_triangles: shadow_counts.triangles,
             draw_calls: main_counts.draw_calls + shadow_counts.draw_calls + 1,
@@ -420,7 +462,70 @@ impl Renderer {
             sky_horizon: v4(self.scene_sky.horizon, 0.0),
             sky_ground: v4(self.scene_sky.ground, 0.0),
             cascade_far: cascades.map(|c| c.far),
-            shadow_params: [1.0 / self.frame.shadow_resolution as f32, 0.0, 0.0, 0.0],
+            shadow_params: [
+                1.0 / self.frame.shadow_resolution as f32,
+                0.0,
+                self.options.debug.code(),
+                0.0,
+            ],
         }
+    }
+}
+
+// Viewer hooks (`sylvan view`): read the output target and change what the frame uniforms carry
+// without re-creating the renderer. None of these allocates GPU resources.
+impl Renderer {
+    /// The options in effect (size, technique, debug view, …).
+    pub fn options(&self) -> &RenderOptions {
+        &self.options
+    }
+
+    /// The output target (`OUTPUT_FORMAT`, the output size) that [`Renderer::render`] draws into.
+    pub fn output(&self) -> &RenderTarget {
+        &self.targets.output
+    }
+
+    /// Sky and ambient colours from the next frame on.
+    pub fn set_sky(&mut self, sky: sylvan_scene::Sky) {
+        self.scene_sky = sky;
+    }
+
+    /// Distance fog from the next frame on.
+    pub fn set_fog(&mut self, fog: sylvan_scene::Fog) {
+        self.fog_half = fog.half_distance_m.max(0.0);
+    }
+
+    /// Exposure multiplier from the next frame on.
+    pub fn set_exposure(&mut self, exposure: f32) {
+        self.options.exposure = exposure;
+    }
+
+    /// Debug colouring from the next frame on.
+    pub fn set_debug(&mut self, debug: DebugView) {
+        self.options.debug = debug;
+    }
+
+    /// Cascaded shadows on or off from the next frame on (the shadow maps stay allocated).
+    pub fn set_shadows(&mut self, shadows: bool) {
+        self.options.shadows = shadows;
+    }
+}
+
+// Baking and technique state.
+impl Renderer {
+    /// How each plant's baked asset was obtained when the renderer was made (empty for
+    /// techniques without a bake).
+    pub fn bake_reports(&self) -> &[BakeReport] {
+        &self.bake_reports
+    }
+
+    /// Name of the technique drawing the trees.
+    pub fn technique_name(&self) -> &'static str {
+        self.technique.name()
+    }
+
+    /// Times a per-frame buffer had to grow (0 once the scene's worst frame has been seen).
+    pub fn buffer_reallocations(&self) -> u32 {
+        self.technique.reallocations()
     }
 }

@@ -29,6 +29,7 @@ impl SkyPass {
                 pass: PassKind::Main,
                 cull: None,
                 depth_write: false,
+                blend: None,
             },
         );
         Self { pipeline }

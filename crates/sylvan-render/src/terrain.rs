@@ -87,6 +87,7 @@ impl TerrainPass {
                 pass: PassKind::Main,
                 cull: Some(wgpu::Face::Back),
                 depth_write: true,
+                blend: None,
             },
         );
         let shadow = pipeline::build(
@@ -101,6 +102,7 @@ impl TerrainPass {
                 pass: PassKind::Shadow,
                 cull: None,
                 depth_write: true,
+                blend: None,
             },
         );
         Self {

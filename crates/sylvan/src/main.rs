@@ -1,4 +1,4 @@
-//! The `sylvan` command line: `plant`, `bake`, `render`, `bench`, `compare`.
+//! The `sylvan` command line: `plant`, `bake`, `render`, `bench`, `compare`, `view`.
 //!
 //! The binary is thin: each subcommand parses its flags into a validated configuration and calls
 //! the libraries. Errors print once, on one line, as `error: FILE:LINE:COL: what — fix` where a
@@ -21,6 +21,8 @@ struct Cli {
 enum Command {
     /// Build a plant from an L-system, a preset or a mesh; print stats or export .glb.
     Plant(cmd::plant::PlantArgs),
+    /// Bake a plant's image-based asset for a technique (cached; --out FILE to choose).
+    Bake(cmd::bake::BakeCmdArgs),
     /// Render one frame of a scene to a PNG.
     Render(cmd::render::RenderArgs),
     /// Time N frames of a scene with one technique; print JSON.
@@ -43,6 +45,7 @@ fn main() -> ExitCode {
     };
     let result = match cli.command {
         Command::Plant(args) => cmd::plant::run(args),
+        Command::Bake(args) => cmd::bake::run(args),
         Command::Render(args) => cmd::render::run(args),
         Command::Bench(args) => cmd::bench::run(args),
         Command::Compare(args) => cmd::compare::run(args),

@@ -18,7 +18,7 @@ struct Frame {
     sky_ground: vec4<f32>,
     // Far distance (view depth, metres) of each cascade.
     cascade_far: vec4<f32>,
-    // x: shadow map texel size (1/resolution); y: time; zw: unused.
+    // x: shadow map texel size (1/resolution); y: time; z: debug view (`DebugView`); w: unused.
     shadow_params: vec4<f32>,
 };
 
@@ -26,19 +26,24 @@ struct Frame {
 @group(0) @binding(1) var shadow_map: texture_depth_2d_array;
 @group(0) @binding(2) var shadow_sampler: sampler_comparison;
 
+// The shadow cascade covering `world` (by view distance), or CASCADES beyond the last one.
+fn cascade_index(world: vec3<f32>) -> u32 {
+    let dist = distance(world, frame.camera.xyz);
+    for (var i = 0u; i < CASCADES; i = i + 1u) {
+        if (dist < frame.cascade_far[i]) {
+            return i;
+        }
+    }
+    return CASCADES;
+}
+
 // Fraction of sunlight reaching `world` (1 = lit), 3×3 PCF in the cascade covering it.
 fn sun_visibility(world: vec3<f32>, normal_offset: vec3<f32>) -> f32 {
     if (frame.sun_dir.w < 0.5) {
         return 1.0;
     }
     let dist = distance(world, frame.camera.xyz);
-    var cascade = CASCADES;
-    for (var i = 0u; i < CASCADES; i = i + 1u) {
-        if (dist < frame.cascade_far[i]) {
-            cascade = i;
-            break;
-        }
-    }
+    let cascade = cascade_index(world);
     if (cascade == CASCADES) {
         return 1.0;
     }
@@ -68,18 +73,42 @@ fn sky_light(n: vec3<f32>) -> vec3<f32> {
     return mix(frame.sky_ground.rgb, sky, up);
 }
 
-// Exponential distance fog towards the horizon colour, with a little sun in-scatter.
-fn apply_fog(color: vec3<f32>, world: vec3<f32>) -> vec3<f32> {
+// Exponential distance fog towards the horizon colour, with a little sun in-scatter:
+// rgb the fog colour, a the fog fraction at `world`.
+fn fog_at(world: vec3<f32>) -> vec4<f32> {
     let half_dist = frame.camera.w;
     if (half_dist <= 0.0) {
-        return color;
+        return vec4<f32>(0.0);
     }
     let v = world - frame.camera.xyz;
     let d = length(v);
     let f = 1.0 - exp2(-d / half_dist);
-    let sun_amount = pow(max(dot(v / d, frame.sun_dir.xyz), 0.0), 8.0);
+    let sun_amount = pow(max(dot(v / max(d, 1e-6), frame.sun_dir.xyz), 0.0), 8.0);
     let fog = mix(frame.sky_horizon.rgb, frame.sun_color.rgb * 0.35, sun_amount * 0.4);
-    return mix(color, fog, f);
+    return vec4<f32>(fog, f);
+}
+
+fn apply_fog(color: vec3<f32>, world: vec3<f32>) -> vec3<f32> {
+    let fog = fog_at(world);
+    return mix(color, fog.rgb, fog.a);
+}
+
+// The same for a premultiplied colour of coverage `alpha`.
+fn apply_fog_premultiplied(color: vec3<f32>, alpha: f32, world: vec3<f32>) -> vec3<f32> {
+    let fog = fog_at(world);
+    return mix(color, fog.rgb * alpha, fog.a);
+}
+
+// Crown self-occlusion for the sky term, from a model-space point's place in the plant's
+// bounding box: points deep inside the crown see less sky. Shared by every tree technique so
+// that they all shade like the reference.
+fn crown_occlusion(p: vec3<f32>, bbox_min: vec3<f32>, bbox_max: vec3<f32>) -> f32 {
+    let centre = (bbox_min + bbox_max) * 0.5;
+    let half_extent = max((bbox_max - bbox_min) * 0.5, vec3<f32>(1e-3));
+    let q = (p - centre) / half_extent;
+    let radial = clamp(length(q.xz), 0.0, 1.0);
+    let height = clamp((p.y - bbox_min.y) / (2.0 * half_extent.y), 0.0, 1.0);
+    return clamp(0.35 + 0.45 * radial + 0.3 * height, 0.0, 1.0);
 }
 
 // Cheap integer hash → [0, 1).
@@ -87,4 +116,53 @@ fn hash13(p: vec3<f32>) -> f32 {
     var q = fract(p * 0.1031);
     q = q + dot(q, q.zyx + 31.32);
     return fract((q.x + q.y) * q.z);
+}
+
+// Debug views (`frame.shadow_params.z`, `DebugView` in Rust): 0 none, 1 colour by technique,
+// 2 colour by shadow cascade.
+const DEBUG_TECHNIQUE: u32 = 1u;
+const DEBUG_CASCADES: u32 = 2u;
+
+// One colour per technique, by its index in `TechniqueKind::ALL` (geometry = 0).
+fn technique_color(technique: i32) -> vec3<f32> {
+    switch technique {
+        case 0: { return vec3<f32>(1.0, 0.45, 0.05); }   // geometry: orange
+        case 1: { return vec3<f32>(0.1, 0.5, 1.0); }     // boxtree: blue
+        case 2: { return vec3<f32>(0.9, 0.1, 0.9); }     // hbt: magenta
+        case 3: { return vec3<f32>(1.0, 0.9, 0.1); }     // billboard-cloud: yellow
+        case 4: { return vec3<f32>(0.1, 0.9, 0.9); }     // zfield: cyan
+        case 5: { return vec3<f32>(1.0, 0.1, 0.1); }     // shadermap: red
+        default: { return vec3<f32>(1.0, 1.0, 1.0); }
+    }
+}
+
+fn cascade_color(cascade: u32) -> vec3<f32> {
+    switch cascade {
+        case 0u: { return vec3<f32>(1.0, 0.15, 0.15); }
+        case 1u: { return vec3<f32>(0.15, 1.0, 0.15); }
+        case 2u: { return vec3<f32>(0.2, 0.4, 1.0); }
+        case 3u: { return vec3<f32>(1.0, 0.9, 0.1); }
+        default: { return vec3<f32>(1.0, 1.0, 1.0); }
+    }
+}
+
+// Applies the frame's debug view to a shaded colour at `world`. `technique` is the drawing
+// technique's index in `TechniqueKind::ALL`, or -1 for terrain (drawn grey in the technique view).
+fn debug_tint(color: vec3<f32>, world: vec3<f32>, technique: i32) -> vec3<f32> {
+    let mode = u32(frame.shadow_params.z + 0.5);
+    let luma = dot(color, vec3<f32>(0.2126, 0.7152, 0.0722));
+    if (mode == DEBUG_TECHNIQUE) {
+        if (technique < 0) {
+            return vec3<f32>(luma * 0.6);
+        }
+        return technique_color(technique) * (0.15 + 1.5 * luma);
+    }
+    if (mode == DEBUG_CASCADES) {
+        let c = cascade_index(world);
+        if (c == CASCADES) {
+            return color;
+        }
+        return mix(color, cascade_color(c) * (0.2 + 1.5 * luma), 0.6);
+    }
+    return color;
 }

@@ -50,5 +50,5 @@ fn fs_terrain(in: TerrainOut) -> @location(0) vec4<f32> {
     let ndl = max(dot(n, l), 0.0);
     let vis = select(sun_visibility(in.world, n * 0.15), 0.0, ndl <= 0.0);
     let light = frame.sun_color.rgb * ndl * vis + sky_light(n);
-    return vec4<f32>(apply_fog(albedo * light, in.world), 1.0);
+    return vec4<f32>(debug_tint(apply_fog(albedo * light, in.world), in.world, -1), 1.0);
 }

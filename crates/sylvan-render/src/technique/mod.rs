@@ -3,16 +3,19 @@
 //! | `--technique` | module | paper |
 //! |---|---|---|
 //! | `geometry` | [`geometry`] | reference: full meshes, the ground truth |
-//! | `boxtree` | — | LCV04 (not yet implemented) |
+//! | `boxtree` | [`boxtree`] | LCV04 |
 //! | `hbt` | — | MNP01 (not yet implemented) |
 //! | `billboard-cloud` | — | GPSS07 (not yet implemented) |
 //! | `zfield` | — | BN12 §5 (not yet implemented) |
 //! | `shadermap` | — | BN12 §6 (not yet implemented) |
 //! | `auto` | — | the LOD chain (not yet implemented) |
 
+pub(crate) mod any;
+pub mod boxtree;
 pub mod geometry;
 
 use crate::RenderError;
+use crate::bake::codec::DecodeError;
 use crate::frame::FrameResources;
 use crate::instances::Instances;
 use std::ops::Range;
@@ -69,8 +72,21 @@ impl TechniqueKind {
     }
 }
 
+/// What a technique may look at once per frame, before any pass is recorded.
+pub struct FrameInput<'a> {
+    /// Eye position (world).
+    pub eye: glam::Vec3,
+    /// Pixels covered by one metre at one metre's distance in the output image
+    /// (`height / (2 tan(fov_y / 2))`).
+    pub pixels_per_metre: f32,
+    /// This frame's culled instances (CPU copies per pass and species).
+    pub instances: &'a Instances,
+}
+
 /// What a technique needs to draw one pass.
 pub struct DrawContext<'a> {
+    /// Which pass: 0 the camera view, `1 + c` shadow cascade `c`.
+    pub pass: usize,
     /// Group-0 bind group for this pass (main or cascade).
     pub frame_bind: &'a wgpu::BindGroup,
     /// The frame's culled instances.
@@ -95,14 +111,45 @@ impl std::ops::AddAssign for DrawCounts {
     }
 }
 
-/// A tree representation: built once from the plants (`prepare`, which uploads everything), then
-/// drawn every frame from its prepared state and the frame's instances only. Techniques that
-/// need an offline bake add it with the shared baker (see `docs/DESIGN.md`).
+/// A tree representation. Offline, [`Representation::bake`] turns one plant into a baked
+/// asset (pure function of the plant and parameters, cached on disk by the shared baker with
+/// [`Representation::encode`] / [`Representation::decode`]); [`Representation::prepare`]
+/// uploads the assets of every species once; per frame, [`Representation::update`] sees the
+/// culled instances and the draw calls record passes from prepared state only.
 pub trait Representation: Sized {
     /// The `--technique` name.
     const NAME: &'static str;
-    /// Uploads what the technique needs for `plants` (one per species).
-    fn prepare(gpu: &Gpu, frame: &FrameResources, plants: &[Plant]) -> Result<Self, RenderError>;
+    /// Version of the baked payload; bump when [`Representation::encode`]'s output changes.
+    const FORMAT_VERSION: u32;
+    /// Bake and draw parameters.
+    type Params: Clone + Default + std::fmt::Debug;
+    /// The baked asset of one plant.
+    type Baked: Clone;
+    /// Content hash of every input of [`Representation::bake`] (the cache key).
+    fn input_hash(plant: &Plant, params: &Self::Params) -> u64;
+    /// Bakes one plant; `progress(done, total)` reports work units as they complete.
+    fn bake(
+        gpu: &Gpu,
+        plant: &Plant,
+        params: &Self::Params,
+        progress: &mut dyn FnMut(usize, usize),
+    ) -> Result<Self::Baked, RenderError>;
+    /// Serialises a baked asset.
+    fn encode(baked: &Self::Baked) -> Vec<u8>;
+    /// Reads a baked asset back (every length and range checked).
+    fn decode(bytes: &[u8]) -> Result<Self::Baked, DecodeError>;
+    /// Uploads what the technique needs for `plants` (one per species) and their assets.
+    fn prepare(
+        gpu: &Gpu,
+        frame: &FrameResources,
+        plants: &[Plant],
+        baked: &[Self::Baked],
+        params: &Self::Params,
+    ) -> Result<Self, RenderError>;
+    /// Per-frame work before the passes are recorded (level-of-detail selection, uploads).
+    fn update(&mut self, _gpu: &Gpu, _input: &FrameInput<'_>) -> Result<(), RenderError> {
+        Ok(())
+    }
     /// Records the main (camera) pass.
     fn draw(&self, pass: &mut wgpu::RenderPass<'_>, ctx: &DrawContext<'_>) -> DrawCounts;
     /// Records one shadow cascade pass (depth only).

@@ -1,8 +1,11 @@
-//! `sylvan bench`: N timed frames of one technique, as one JSON object.
+//! `sylvan bench`: N timed frames of one technique, as one JSON object. With `--path FILE` the
+//! camera follows a recorded camera path (the viewer's format), sampled evenly over its keys, and
+//! the JSON also carries `per_frame` records.
 
-use super::common::{ViewArgs, prepare};
-use super::stats::Report;
+use super::common::{ViewArgs, load_path, path_time, prepare};
+use super::stats::{FrameRecord, Report};
 use anyhow::{Result, bail};
+use std::path::PathBuf;
 
 /// Flags of `sylvan bench`.
 #[derive(clap::Args, Debug)]
@@ -15,6 +18,10 @@ pub struct BenchArgs {
     /// Print one JSON object on stdout.
     #[arg(long)]
     pub json: bool,
+    /// Replay a camera path (TOML, as `sylvan view` records it): frame i of N is at path time
+    /// duration·i/(N−1); the JSON gains `path` and `per_frame` (t, ms, counts per frame).
+    #[arg(long, value_name = "FILE.toml")]
+    pub path: Option<PathBuf>,
 }
 
 /// Most frames a bench may ask for.
@@ -28,21 +35,36 @@ pub fn run(args: BenchArgs) -> Result<()> {
             args.frames
         );
     }
+    let camera_path = match &args.path {
+        Some(p) => Some(load_path(p, args.view.camera.as_deref())?),
+        None => None,
+    };
     let r = args.view.resolve()?;
+    let camera_at = |i: usize| match &camera_path {
+        Some(p) => {
+            let t = path_time(i, args.frames, p.duration());
+            (t, p.sample(t))
+        }
+        None => (0.0, r.camera),
+    };
     let (gpu, mut renderer, bake_ms) = prepare(&r)?;
     for _ in 0..2 {
-        renderer.render(&gpu, &r.camera, &r.sun)?;
+        renderer.render(&gpu, &camera_at(0).1, &r.sun)?;
     }
     // A frame can take seconds on a software rasteriser: show progress on a terminal
     // (indicatif draws nothing when stderr is not one, so JSON consumers see no noise).
     let progress = indicatif::ProgressBar::new(args.frames as u64).with_message("frames");
     let mut frames = Vec::with_capacity(args.frames);
-    for _ in 0..args.frames {
-        frames.push(renderer.render(&gpu, &r.camera, &r.sun)?);
+    let mut records = Vec::with_capacity(args.frames);
+    for i in 0..args.frames {
+        let (t, camera) = camera_at(i);
+        let stats = renderer.render(&gpu, &camera, &r.sun)?;
+        records.push(FrameRecord::new(t, &stats));
+        frames.push(stats);
         progress.inc(1);
     }
     progress.finish_and_clear();
-    let report = Report::new(
+    let mut report = Report::new(
         r.options.technique.name(),
         [r.options.width, r.options.height],
         r.options.spp,
@@ -50,6 +72,10 @@ pub fn run(args: BenchArgs) -> Result<()> {
         bake_ms,
         gpu.adapter_label(),
     );
+    if let Some(p) = &args.path {
+        report.path = Some(p.display().to_string());
+        report.per_frame = Some(records);
+    }
     if args.json {
         println!("{}", serde_json::to_string(&report)?);
     } else {

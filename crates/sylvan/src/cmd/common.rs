@@ -3,6 +3,8 @@
 use anyhow::{Context, Result, bail};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
+use sylvan_render::bake::CachePolicy;
+use sylvan_render::technique::boxtree::{BoxTreeParams, PlaneLayout};
 use sylvan_render::{RenderOptions, TechniqueKind};
 use sylvan_scene::{Camera, Scene, Sun};
 
@@ -32,6 +34,66 @@ pub struct ViewArgs {
     /// Shadow-map resolution per cascade.
     #[arg(long, default_value_t = 2048)]
     pub shadow_res: u32,
+    #[command(flatten)]
+    pub bake: BakeArgs,
+}
+
+/// Bake parameters and the cache, shared by every command that may bake.
+#[derive(clap::Args, Debug, Clone)]
+pub struct BakeArgs {
+    /// boxtree: image size per box face in texels (LCV04 uses 64 or 128).
+    #[arg(long, default_value_t = BoxTreeParams::default().tile)]
+    pub tile: u32,
+    /// boxtree: plane arrangement, `diagonal` (LCV04 fig. 6) or `axis` (fig. 3).
+    #[arg(long, default_value = "diagonal")]
+    pub planes: String,
+    /// boxtree: volume-ratio threshold for boxes to get images (LCV04 §3.2.4).
+    #[arg(long, default_value_t = BoxTreeParams::default().volume_threshold)]
+    pub volume_threshold: f32,
+    /// boxtree: keep all wood as geometry instead of baking it into the box images.
+    #[arg(long)]
+    pub wood_geometry: bool,
+    /// boxtree: a box opens when one of its texels would cover more than this many pixels.
+    #[arg(long, default_value_t = BoxTreeParams::default().texel_pixels)]
+    pub texel_pixels: f32,
+    /// boxtree: transition band width, relative to the LOD distance (0 = hard switches).
+    #[arg(long, default_value_t = BoxTreeParams::default().band)]
+    pub band: f32,
+    /// Folder for baked assets (default: $SYLVAN_CACHE_DIR, $XDG_CACHE_HOME/sylvan or ~/.cache/sylvan).
+    #[arg(long)]
+    pub cache_dir: Option<PathBuf>,
+    /// Bake every time; read and write no cache files.
+    #[arg(long)]
+    pub no_cache: bool,
+}
+
+impl BakeArgs {
+    /// The validated boxtree parameters.
+    pub fn boxtree(&self) -> Result<BoxTreeParams> {
+        let layout = PlaneLayout::parse(&self.planes).ok_or_else(|| {
+            anyhow::anyhow!("--planes {}: expected `diagonal` or `axis`", self.planes)
+        })?;
+        let p = BoxTreeParams {
+            tile: self.tile,
+            layout,
+            volume_threshold: self.volume_threshold,
+            bake_wood: !self.wood_geometry,
+            texel_pixels: self.texel_pixels,
+            band: self.band,
+            ..Default::default()
+        };
+        p.validate()?;
+        Ok(p)
+    }
+
+    /// The cache policy.
+    pub fn cache(&self) -> CachePolicy {
+        match (&self.cache_dir, self.no_cache) {
+            (_, true) => CachePolicy::Off,
+            (Some(d), false) => CachePolicy::Dir(d.clone()),
+            (None, false) => CachePolicy::Default,
+        }
+    }
 }
 
 /// Everything a frame command needs, validated.
@@ -131,6 +193,8 @@ impl ViewArgs {
             technique,
             shadows: !self.no_shadows,
             shadow_resolution: self.shadow_res,
+            boxtree: self.bake.boxtree()?,
+            cache: self.bake.cache(),
             ..Default::default()
         };
         options.factor()?;
@@ -152,12 +216,107 @@ impl ViewArgs {
     }
 }
 
-/// Opens the GPU, loads plants and prepares a renderer; returns it with the bake time (ms).
+/// Opens the GPU, loads plants and prepares a renderer (baking what the technique needs, with
+/// a progress bar on a terminal); returns it with the preparation time (ms).
 pub fn prepare(r: &Resolved) -> Result<(sylvan_gpu::Gpu, sylvan_render::Renderer, f64)> {
     let gpu = sylvan_gpu::Gpu::new()?;
     let start = std::time::Instant::now();
     let plants = sylvan_render::load_plants(&r.scene)?;
-    let renderer = sylvan_render::Renderer::new(&gpu, &r.scene, &plants, &r.options)
-        .context("preparing the renderer")?;
+    let bar = BakeBar::new();
+    let renderer = sylvan_render::Renderer::with_progress(
+        &gpu,
+        &r.scene,
+        &plants,
+        &r.options,
+        &mut |plant, done, total| bar.update(plant, done, total),
+    )
+    .context("preparing the renderer")?;
+    bar.finish();
+    for report in renderer.bake_reports() {
+        if let Some(why) = &report.stale {
+            eprintln!("note: re-baked {} ({why})", report.plant);
+        }
+    }
     Ok((gpu, renderer, start.elapsed().as_secs_f64() * 1e3))
+}
+
+/// A progress bar for bakes, drawn only on a terminal (stderr), so JSON on stdout stays clean.
+pub struct BakeBar {
+    bar: Option<indicatif::ProgressBar>,
+}
+
+impl BakeBar {
+    /// A hidden bar unless stderr is a terminal.
+    pub fn new() -> Self {
+        use std::io::IsTerminal;
+        Self {
+            bar: std::io::stderr().is_terminal().then(|| {
+                let b = indicatif::ProgressBar::new(0);
+                b.set_style(
+                    indicatif::ProgressStyle::with_template(
+                        "baking {msg:12} [{bar:30}] {pos}/{len} images ({elapsed})",
+                    )
+                    .expect("valid template")
+                    .progress_chars("=> "),
+                );
+                b
+            }),
+        }
+    }
+
+    /// Shows `done` of `total` for `plant`.
+    pub fn update(&self, plant: &str, done: usize, total: usize) {
+        if let Some(b) = &self.bar {
+            b.set_length(total as u64);
+            b.set_position(done as u64);
+            b.set_message(plant.to_string());
+        }
+    }
+
+    /// Clears the bar.
+    pub fn finish(&self) {
+        if let Some(b) = &self.bar {
+            b.finish_and_clear();
+        }
+    }
+}
+
+impl Default for BakeBar {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// The path time of frame `i` of `n` when a camera path of `duration` seconds is replayed in `n`
+/// frames: evenly spaced from the first key (frame 0) to the last (frame n − 1).
+pub fn path_time(i: usize, n: usize, duration: f32) -> f32 {
+    if n <= 1 {
+        0.0
+    } else {
+        duration * i as f32 / (n - 1) as f32
+    }
+}
+
+/// Loads a camera path for `--path`, refusing it together with `--camera`.
+pub fn load_path(path: &Path, camera_flag: Option<&str>) -> Result<sylvan_scene::CameraPath> {
+    if let Some(c) = camera_flag {
+        bail!(
+            "--camera {c} and --path {}: both set the camera — give one",
+            path.display()
+        );
+    }
+    Ok(sylvan_scene::CameraPath::load(path)?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn path_times_span_the_path() {
+        assert_eq!(path_time(0, 1, 4.0), 0.0);
+        assert_eq!(path_time(0, 5, 4.0), 0.0);
+        assert_eq!(path_time(2, 5, 4.0), 2.0);
+        assert_eq!(path_time(4, 5, 4.0), 4.0);
+    }
 }

@@ -1,5 +1,6 @@
 //! One module per subcommand: flags → validated config → library calls.
 
+pub mod bake;
 pub mod bench;
 pub mod common;
 pub mod compare;

@@ -51,6 +51,43 @@ pub struct Report {
     pub gpu_bytes: u64,
     pub bake_ms: f64,
     pub adapter: String,
+    /// The camera path replayed (`bench --path`), as given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub path: Option<String>,
+    /// One record per timed frame (`bench --path`); `frames` stays the count.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub per_frame: Option<Vec<FrameRecord>>,
+}
+
+/// One frame of a path replay: when on the path, what it cost and drew.
+#[derive(Serialize, Debug, Clone)]
+pub struct FrameRecord {
+    /// Path time in seconds.
+    pub t: f32,
+    /// Frame time in milliseconds (the report's `timer`).
+    pub ms: f64,
+    /// Trees drawn per technique.
+    pub trees_drawn: BTreeMap<String, u32>,
+    /// Triangles in the camera pass.
+    pub triangles: u64,
+    /// Triangles in the shadow passes.
+    pub shadow_triangles: u64,
+    /// Draw calls over all passes.
+    pub draw_calls: u32,
+}
+
+impl FrameRecord {
+    /// The record of `stats`, taken at path time `t`.
+    pub fn new(t: f32, stats: &FrameStats) -> Self {
+        Self {
+            t,
+            ms: stats.frame_ms,
+            trees_drawn: stats.trees_drawn.clone(),
+            triangles: stats.triangles,
+            shadow_triangles: stats.shadow_triangles,
+            draw_calls: stats.draw_calls,
+        }
+    }
 }
 
 impl Report {
@@ -81,6 +118,8 @@ impl Report {
             gpu_bytes: last.gpu_bytes,
             bake_ms,
             adapter,
+            path: None,
+            per_frame: None,
         }
     }
 }

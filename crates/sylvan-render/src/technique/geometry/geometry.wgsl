@@ -18,8 +18,10 @@ struct PlantIn {
     @location(3) color: vec3<f32>,
     // Instance: xyz trunk base, w uniform scale.
     @location(4) base_scale: vec4<f32>,
-    // Instance: x cos(rotation), y sin(rotation), z per-tree tint seed.
+    // Instance: x cos(rotation), y sin(rotation), z per-tree tint seed, w presence in [0, 1]
+    // (1: all leaves; less: a level-of-detail transition keeps that fraction of leaves).
     @location(5) rot: vec4<f32>,
+    @builtin(vertex_index) vertex: u32,
 };
 
 struct PlantOut {
@@ -30,7 +32,15 @@ struct PlantOut {
     @location(3) color: vec3<f32>,
     // x: ambient occlusion estimate from the position in the crown.
     @location(4) ao: f32,
+    // x: the instance's presence; y: this leaf's hash in [0, 1) (a leaf is 4 vertices).
+    @location(5) @interpolate(flat) keep: vec2<f32>,
 };
+
+// During a level-of-detail transition a leaf is drawn when its hash is below the presence,
+// so leaves appear one by one instead of the whole set popping.
+fn leaf_dropped(keep: vec2<f32>) -> bool {
+    return keep.y >= keep.x;
+}
 
 fn instance_transform(in: PlantIn) -> PlantOut {
     let c = in.rot.x;
@@ -45,13 +55,10 @@ fn instance_transform(in: PlantIn) -> PlantOut {
     out.uv = in.uv;
     let tint = 0.85 + 0.3 * in.rot.z;
     out.color = in.color * vec3<f32>(tint, mix(tint, 1.0, 0.5), 1.0);
-    // Crown self-occlusion for the sky term: points deep inside the crown see less sky.
-    let centre = (species.bbox_min.xyz + species.bbox_max.xyz) * 0.5;
-    let half_extent = max((species.bbox_max.xyz - species.bbox_min.xyz) * 0.5, vec3<f32>(1e-3));
-    let q = (in.position - centre) / half_extent;
-    let radial = clamp(length(q.xz), 0.0, 1.0);
-    let height = clamp((in.position.y - species.bbox_min.y) / (2.0 * half_extent.y), 0.0, 1.0);
-    out.ao = clamp(0.35 + 0.45 * radial + 0.3 * height, 0.0, 1.0);
+    // Crown self-occlusion for the sky term.
+    out.ao = crown_occlusion(in.position, species.bbox_min.xyz, species.bbox_max.xyz);
+    let leaf = f32(in.vertex / 4u);
+    out.keep = vec2<f32>(in.rot.w, hash13(vec3<f32>(leaf, leaf * 0.37 + 11.0, in.rot.z * 97.0)));
     return out;
 }
 
@@ -67,7 +74,7 @@ fn fs_wood(in: PlantOut) -> @location(0) vec4<f32> {
     let ndl = max(dot(n, l), 0.0);
     let vis = select(sun_visibility(in.world, n * 0.05), 0.0, ndl <= 0.0);
     let light = frame.sun_color.rgb * ndl * vis + sky_light(n) * in.ao;
-    return vec4<f32>(apply_fog(in.color * light, in.world), 1.0);
+    return vec4<f32>(debug_tint(apply_fog(in.color * light, in.world), in.world, 0), 1.0);
 }
 
 fn leaf_sample(uv: vec2<f32>) -> vec4<f32> {
@@ -77,7 +84,7 @@ fn leaf_sample(uv: vec2<f32>) -> vec4<f32> {
 @fragment
 fn fs_leaf(in: PlantOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
     let tex = leaf_sample(in.uv);
-    if (tex.a < 0.5) {
+    if (tex.a < 0.5 || leaf_dropped(in.keep)) {
         discard;
     }
     var n = normalize(in.normal);
@@ -93,13 +100,14 @@ fn fs_leaf(in: PlantOut, @builtin(front_facing) front: bool) -> @location(0) vec
     let transmitted = albedo * vec3<f32>(1.1, 1.25, 0.55) * translucency * max(-ndl, 0.0);
     let direct = frame.sun_color.rgb * (albedo * max(ndl, 0.0) + transmitted) * vis;
     let ambient = albedo * sky_light(n) * in.ao;
-    return vec4<f32>(apply_fog(direct + ambient, in.world), 1.0);
+    return vec4<f32>(debug_tint(apply_fog(direct + ambient, in.world), in.world, 0), 1.0);
 }
 
 // Shadow casters: wood writes depth only; leaves discard by alpha.
 struct ShadowOut {
     @builtin(position) pos: vec4<f32>,
     @location(0) uv: vec2<f32>,
+    @location(1) @interpolate(flat) keep: vec2<f32>,
 };
 
 @vertex
@@ -108,12 +116,13 @@ fn vs_plant_shadow(in: PlantIn) -> ShadowOut {
     var out: ShadowOut;
     out.pos = t.pos;
     out.uv = t.uv;
+    out.keep = t.keep;
     return out;
 }
 
 @fragment
 fn fs_leaf_shadow(in: ShadowOut) {
-    if (textureSampleLevel(leaf_texture, leaf_sampler, in.uv, 0.0).a < 0.5) {
+    if (textureSampleLevel(leaf_texture, leaf_sampler, in.uv, 0.0).a < 0.5 || leaf_dropped(in.keep)) {
         discard;
     }
 }

@@ -11,6 +11,7 @@
 
 use super::{DrawContext, DrawCounts, Representation};
 use crate::RenderError;
+use crate::bake::codec::DecodeError;
 use crate::frame::FrameResources;
 use crate::instances::GpuTreeInstance;
 use crate::pipeline::{self, PassKind, PipelineSpec};
@@ -23,9 +24,10 @@ use wgpu::util::DeviceExt;
 /// Leaf translucency: fraction of sunlight transmitted diffusely through a leaf.
 pub const LEAF_TRANSLUCENCY: f32 = 0.35;
 
+/// A plant vertex as every plant shader reads it (locations 0–3).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
-struct GpuPlantVertex {
+pub(crate) struct GpuPlantVertex {
     position: [f32; 3],
     normal: [f32; 3],
     uv: [f32; 2],
@@ -33,7 +35,7 @@ struct GpuPlantVertex {
 }
 
 impl GpuPlantVertex {
-    const LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+    pub(crate) const LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
         array_stride: std::mem::size_of::<GpuPlantVertex>() as u64,
         step_mode: wgpu::VertexStepMode::Vertex,
         attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x3],
@@ -48,14 +50,15 @@ struct GpuSpecies {
 }
 
 /// A mesh on the GPU.
-struct GpuMesh {
-    vertices: wgpu::Buffer,
-    indices: wgpu::Buffer,
-    index_count: u32,
+pub(crate) struct GpuMesh {
+    pub(crate) vertices: wgpu::Buffer,
+    pub(crate) indices: wgpu::Buffer,
+    pub(crate) index_count: u32,
 }
 
 impl GpuMesh {
-    fn new(gpu: &Gpu, label: &str, mesh: &Mesh) -> Result<Option<Self>, RenderError> {
+    /// Uploads `mesh` (checked against the device's buffer limit); `None` when it is empty.
+    pub(crate) fn new(gpu: &Gpu, label: &str, mesh: &Mesh) -> Result<Option<Self>, RenderError> {
         if mesh.indices.is_empty() {
             return Ok(None);
         }
@@ -115,46 +118,144 @@ impl GpuMesh {
         ctx: &DrawContext<'_>,
         species: usize,
     ) -> DrawCounts {
-        let range = ctx.ranges[species].clone();
-        if range.is_empty() {
+        self.draw_range(
+            pass,
+            0..self.index_count,
+            ctx.instances.buffer(),
+            ctx.ranges[species].clone(),
+        )
+    }
+
+    /// Draws the triangles `indices` (an index range) once per instance in `instances` of
+    /// `instance_buffer` (vertex slot 1).
+    pub(crate) fn draw_range(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        indices: std::ops::Range<u32>,
+        instance_buffer: &wgpu::Buffer,
+        instances: std::ops::Range<u32>,
+    ) -> DrawCounts {
+        if instances.is_empty() || indices.is_empty() {
             return DrawCounts::default();
         }
         pass.set_vertex_buffer(0, self.vertices.slice(..));
-        pass.set_vertex_buffer(1, ctx.instances.buffer().slice(..));
+        pass.set_vertex_buffer(1, instance_buffer.slice(..));
         pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
-        let n = range.end - range.start;
-        pass.draw_indexed(0..self.index_count, 0, range);
+        let n = instances.end - instances.start;
+        let tris = (indices.end - indices.start) as u64 / 3;
+        pass.draw_indexed(indices, 0, instances);
         DrawCounts {
             draw_calls: 1,
-            triangles: self.index_count as u64 / 3 * n as u64,
+            triangles: tris * n as u64,
         }
     }
 
-    fn bytes(&self) -> u64 {
+    /// GPU bytes.
+    pub(crate) fn bytes(&self) -> u64 {
         self.vertices.size() + self.indices.size()
     }
 }
 
-struct SpeciesMeshes {
-    wood: Option<GpuMesh>,
-    leaves: Option<GpuMesh>,
-    material: wgpu::BindGroup,
+/// One species' meshes and material on the GPU.
+pub(crate) struct SpeciesMeshes {
+    pub(crate) wood: Option<GpuMesh>,
+    pub(crate) leaves: Option<GpuMesh>,
+    pub(crate) material: wgpu::BindGroup,
     texture_bytes: u64,
 }
 
-/// The prepared reference technique.
-pub struct Geometry {
-    species: Vec<SpeciesMeshes>,
-    wood: wgpu::RenderPipeline,
-    leaf: wgpu::RenderPipeline,
-    wood_shadow: wgpu::RenderPipeline,
-    leaf_shadow: wgpu::RenderPipeline,
+impl SpeciesMeshes {
+    /// Uploads `wood` and `leaves` (the plant's own meshes, or re-ordered copies) with the
+    /// plant's leaf texture as material.
+    pub(crate) fn new(
+        gpu: &Gpu,
+        pipes: &MeshPipelines,
+        plant: &Plant,
+        wood: &Mesh,
+        leaves: &Mesh,
+    ) -> Result<Self, RenderError> {
+        let device = &gpu.device;
+        let tex = &plant.leaf_texture;
+        if tex.width == 0
+            || tex.height == 0
+            || tex.rgba.len() != (tex.width * tex.height * 4) as usize
+        {
+            return Err(RenderError::Plant(format!(
+                "{}: leaf texture size does not match its data",
+                plant.name
+            )));
+        }
+        gpu.check_texture_size("leaf texture", tex.width, tex.height)?;
+        let levels = texture::cutout_mips(Level {
+            width: tex.width,
+            height: tex.height,
+            rgba: tex.rgba.clone(),
+        });
+        let texture = texture::upload(gpu, "leaf_texture", &levels);
+        let texture_bytes = levels.iter().map(|l| l.rgba.len() as u64).sum();
+        let view = texture.create_view(&Default::default());
+        let raw = GpuSpecies {
+            bbox_min: [plant.bbox_min[0], plant.bbox_min[1], plant.bbox_min[2], 0.0],
+            bbox_max: [
+                plant.bbox_max[0],
+                plant.bbox_max[1],
+                plant.bbox_max[2],
+                LEAF_TRANSLUCENCY,
+            ],
+        };
+        let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("species_uniform"),
+            contents: bytemuck::bytes_of(&raw),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let material = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("geometry_material"),
+            layout: &pipes.material_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::Sampler(&pipes.sampler),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: uniform.as_entire_binding(),
+                },
+            ],
+        });
+        Ok(Self {
+            wood: GpuMesh::new(gpu, &format!("{} wood", plant.name), wood)?,
+            leaves: GpuMesh::new(gpu, &format!("{} leaves", plant.name), leaves)?,
+            material,
+            texture_bytes,
+        })
+    }
+
+    /// GPU bytes (meshes and texture).
+    pub(crate) fn bytes(&self) -> u64 {
+        self.texture_bytes
+            + self.wood.as_ref().map_or(0, GpuMesh::bytes)
+            + self.leaves.as_ref().map_or(0, GpuMesh::bytes)
+    }
 }
 
-impl Representation for Geometry {
-    const NAME: &'static str = "geometry";
+/// The four mesh pipelines (wood and leaves, main and shadow) and their material layout,
+/// shared by every technique that draws some of a plant as real geometry.
+pub(crate) struct MeshPipelines {
+    pub(crate) material_layout: wgpu::BindGroupLayout,
+    sampler: wgpu::Sampler,
+    pub(crate) wood: wgpu::RenderPipeline,
+    pub(crate) leaf: wgpu::RenderPipeline,
+    pub(crate) wood_shadow: wgpu::RenderPipeline,
+    pub(crate) leaf_shadow: wgpu::RenderPipeline,
+}
 
-    fn prepare(gpu: &Gpu, frame: &FrameResources, plants: &[Plant]) -> Result<Self, RenderError> {
+impl MeshPipelines {
+    /// Builds the pipelines for `frame`'s pass layouts.
+    pub(crate) fn new(gpu: &Gpu, frame: &FrameResources) -> Self {
         let device = &gpu.device;
         let material_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("geometry_material_layout"),
@@ -184,66 +285,6 @@ impl Representation for Geometry {
             // shadow pass ~1000× slower (measured: 150 s vs 0.1 s for two trees).
             ..Default::default()
         });
-        let mut species = Vec::with_capacity(plants.len());
-        for plant in plants {
-            let tex = &plant.leaf_texture;
-            if tex.width == 0
-                || tex.height == 0
-                || tex.rgba.len() != (tex.width * tex.height * 4) as usize
-            {
-                return Err(RenderError::Plant(format!(
-                    "{}: leaf texture size does not match its data",
-                    plant.name
-                )));
-            }
-            gpu.check_texture_size("leaf texture", tex.width, tex.height)?;
-            let levels = texture::cutout_mips(Level {
-                width: tex.width,
-                height: tex.height,
-                rgba: tex.rgba.clone(),
-            });
-            let texture = texture::upload(gpu, "leaf_texture", &levels);
-            let texture_bytes = levels.iter().map(|l| l.rgba.len() as u64).sum();
-            let view = texture.create_view(&Default::default());
-            let raw = GpuSpecies {
-                bbox_min: [plant.bbox_min[0], plant.bbox_min[1], plant.bbox_min[2], 0.0],
-                bbox_max: [
-                    plant.bbox_max[0],
-                    plant.bbox_max[1],
-                    plant.bbox_max[2],
-                    LEAF_TRANSLUCENCY,
-                ],
-            };
-            let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("species_uniform"),
-                contents: bytemuck::bytes_of(&raw),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
-            let material = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("geometry_material"),
-                layout: &material_layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::TextureView(&view),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: wgpu::BindingResource::Sampler(&sampler),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: uniform.as_entire_binding(),
-                    },
-                ],
-            });
-            species.push(SpeciesMeshes {
-                wood: GpuMesh::new(gpu, &format!("{} wood", plant.name), &plant.wood)?,
-                leaves: GpuMesh::new(gpu, &format!("{} leaves", plant.name), &plant.leaves)?,
-                material,
-                texture_bytes,
-            });
-        }
         let module = sylvan_gpu::shader(
             gpu,
             "geometry",
@@ -263,64 +304,124 @@ impl Representation for Geometry {
                     pass,
                     cull,
                     depth_write: true,
+                    blend: None,
                 },
             )
         };
         let back = Some(wgpu::Face::Back);
-        Ok(Self {
-            species,
-            wood: make(
-                "geometry_wood",
-                PassKind::Main,
-                "vs_plant",
-                Some("fs_wood"),
-                back,
-                &frame.main_layout,
-            ),
-            leaf: make(
-                "geometry_leaf",
-                PassKind::Main,
-                "vs_plant",
-                Some("fs_leaf"),
-                None,
-                &frame.main_layout,
-            ),
-            wood_shadow: make(
-                "geometry_wood_shadow",
-                PassKind::Shadow,
-                "vs_plant_shadow",
-                None,
-                None,
-                &frame.shadow_layout,
-            ),
-            leaf_shadow: make(
-                "geometry_leaf_shadow",
-                PassKind::Shadow,
-                "vs_plant_shadow",
-                Some("fs_leaf_shadow"),
-                None,
-                &frame.shadow_layout,
-            ),
-        })
+        let main = &frame.main_layout;
+        let shadow = &frame.shadow_layout;
+        let wood = make(
+            "geometry_wood",
+            PassKind::Main,
+            "vs_plant",
+            Some("fs_wood"),
+            back,
+            main,
+        );
+        let leaf = make(
+            "geometry_leaf",
+            PassKind::Main,
+            "vs_plant",
+            Some("fs_leaf"),
+            None,
+            main,
+        );
+        let wood_shadow = make(
+            "geometry_wood_shadow",
+            PassKind::Shadow,
+            "vs_plant_shadow",
+            None,
+            None,
+            shadow,
+        );
+        let leaf_shadow = make(
+            "geometry_leaf_shadow",
+            PassKind::Shadow,
+            "vs_plant_shadow",
+            Some("fs_leaf_shadow"),
+            None,
+            shadow,
+        );
+        Self {
+            material_layout,
+            sampler,
+            wood,
+            leaf,
+            wood_shadow,
+            leaf_shadow,
+        }
+    }
+
+    /// The (wood, leaf) pipelines of a pass.
+    pub(crate) fn for_pass(&self, shadow: bool) -> (&wgpu::RenderPipeline, &wgpu::RenderPipeline) {
+        if shadow {
+            (&self.wood_shadow, &self.leaf_shadow)
+        } else {
+            (&self.wood, &self.leaf)
+        }
+    }
+}
+
+/// The prepared reference technique.
+pub struct Geometry {
+    species: Vec<SpeciesMeshes>,
+    pipes: MeshPipelines,
+}
+
+impl Representation for Geometry {
+    const NAME: &'static str = "geometry";
+    const FORMAT_VERSION: u32 = 1;
+    type Params = ();
+    /// Nothing to bake: the meshes are the plant's own.
+    type Baked = ();
+
+    fn input_hash(_: &Plant, _: &()) -> u64 {
+        0
+    }
+
+    fn bake(
+        _: &Gpu,
+        _: &Plant,
+        _: &(),
+        _: &mut dyn FnMut(usize, usize),
+    ) -> Result<(), RenderError> {
+        Ok(())
+    }
+
+    fn encode(_: &()) -> Vec<u8> {
+        Vec::new()
+    }
+
+    fn decode(_: &[u8]) -> Result<(), DecodeError> {
+        Ok(())
+    }
+
+    fn prepare(
+        gpu: &Gpu,
+        frame: &FrameResources,
+        plants: &[Plant],
+        _: &[()],
+        _: &(),
+    ) -> Result<Self, RenderError> {
+        let pipes = MeshPipelines::new(gpu, frame);
+        let species = plants
+            .iter()
+            .map(|p| SpeciesMeshes::new(gpu, &pipes, p, &p.wood, &p.leaves))
+            .collect::<Result<_, _>>()?;
+        Ok(Self { species, pipes })
     }
 
     fn draw(&self, pass: &mut wgpu::RenderPass<'_>, ctx: &DrawContext<'_>) -> DrawCounts {
-        self.record(pass, ctx, &self.wood, &self.leaf)
+        self.record(pass, ctx, false)
     }
 
     fn draw_shadow(&self, pass: &mut wgpu::RenderPass<'_>, ctx: &DrawContext<'_>) -> DrawCounts {
-        self.record(pass, ctx, &self.wood_shadow, &self.leaf_shadow)
+        self.record(pass, ctx, true)
     }
 
     fn bytes(&self) -> u64 {
-        self.species
-            .iter()
-            .map(|s| {
-                s.texture_bytes
-                    + s.wood.as_ref().map_or(0, GpuMesh::bytes)
-                    + s.leaves.as_ref().map_or(0, GpuMesh::bytes)
-            })
-            .sum()
+        self.species.iter().map(SpeciesMeshes::bytes).sum()
     }
 }
 
@@ -329,9 +430,9 @@ impl Geometry {
         &self,
         pass: &mut wgpu::RenderPass<'_>,
         ctx: &DrawContext<'_>,
-        wood: &wgpu::RenderPipeline,
-        leaf: &wgpu::RenderPipeline,
+        shadow: bool,
     ) -> DrawCounts {
+        let (wood, leaf) = self.pipes.for_pass(shadow);
         let mut counts = DrawCounts::default();
         pass.set_bind_group(0, ctx.frame_bind, &[]);
         for (pipeline, pick) in [(wood, 0), (leaf, 1)] {

@@ -1,0 +1,242 @@
+//! The baked-asset cache: one file per (plant, technique, parameters).
+//!
+//! File layout (little-endian):
+//!
+//! | bytes | field |
+//! |---|---|
+//! | 8 | magic `SYLVBAKE` |
+//! | 4 | container version ([`CONTAINER_VERSION`]) |
+//! | 4 | technique format version (the technique's own, bumped when its payload changes) |
+//! | 8 + n | technique name (length-prefixed) |
+//! | 8 | key: content hash of every input (plant meshes, texture, parameters, versions) |
+//! | 8 | payload length |
+//! | 8 | payload checksum (FNV-1a 64) |
+//! | … | payload |
+//!
+//! Writes go to a temporary file in the same folder, are flushed to disk, then renamed over the
+//! destination, so a reader sees either the old file or the complete new one — an interrupted
+//! bake never leaves a half-written cache. A file that is truncated, corrupt, from another
+//! version or for other inputs reads as [`Lookup::Stale`] with the reason, and is re-baked.
+
+use super::codec::{Decoder, Encoder, fnv64};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// Bumped when the container layout above changes.
+pub const CONTAINER_VERSION: u32 = 1;
+const MAGIC: &[u8; 8] = b"SYLVBAKE";
+
+/// What identifies a cache entry.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CacheKey {
+    /// Technique name (`boxtree`, …).
+    pub technique: String,
+    /// The technique's payload format version.
+    pub format_version: u32,
+    /// Content hash of every input.
+    pub hash: u64,
+}
+
+/// The result of reading a cache file.
+#[derive(Debug)]
+pub enum Lookup {
+    /// The file exists and matches the key: its payload.
+    Hit(Vec<u8>),
+    /// No file.
+    Miss,
+    /// A file exists but cannot be used; the reason, for the log.
+    Stale(String),
+}
+
+/// The folder baked assets go to: `$SYLVAN_CACHE_DIR`, else `$XDG_CACHE_HOME/sylvan`, else
+/// `$HOME/.cache/sylvan`, else `.sylvan-cache` in the working directory.
+pub fn default_dir() -> PathBuf {
+    let env = |k: &str| {
+        std::env::var_os(k)
+            .filter(|v| !v.is_empty())
+            .map(PathBuf::from)
+    };
+    if let Some(d) = env("SYLVAN_CACHE_DIR") {
+        return d;
+    }
+    if let Some(d) = env("XDG_CACHE_HOME") {
+        return d.join("sylvan");
+    }
+    if let Some(h) = env("HOME") {
+        return h.join(".cache").join("sylvan");
+    }
+    PathBuf::from(".sylvan-cache")
+}
+
+/// The file name for an entry: `<plant>-<technique>-<hash>.sylbake`, the plant name reduced to
+/// file-safe characters.
+pub fn file_name(plant: &str, key: &CacheKey) -> String {
+    let safe: String = plant
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .take(48)
+        .collect();
+    format!("{safe}-{}-{:016x}.sylbake", key.technique, key.hash)
+}
+
+/// Serialises an entry (header + payload).
+pub fn encode(key: &CacheKey, payload: &[u8]) -> Vec<u8> {
+    let mut e = Encoder::default();
+    e.buf.extend_from_slice(MAGIC);
+    e.u32(CONTAINER_VERSION);
+    e.u32(key.format_version);
+    e.str(&key.technique);
+    e.u64(key.hash);
+    e.u64(payload.len() as u64);
+    e.u64(fnv64(payload));
+    e.buf.extend_from_slice(payload);
+    e.buf
+}
+
+/// Parses an entry and checks it against `key`; the payload on success, else why not.
+pub fn decode(bytes: &[u8], key: &CacheKey) -> Result<Vec<u8>, String> {
+    if bytes.len() < MAGIC.len() || &bytes[..MAGIC.len()] != MAGIC {
+        return Err("not a Sylvan bake file (bad magic)".into());
+    }
+    let mut d = Decoder::new(&bytes[MAGIC.len()..]);
+    let header = (|| {
+        Ok::<_, super::codec::DecodeError>((
+            d.u32()?,
+            d.u32()?,
+            d.str()?,
+            d.u64()?,
+            d.u64()?,
+            d.u64()?,
+        ))
+    })();
+    let (container, format, technique, hash, len, checksum) =
+        header.map_err(|e| format!("header {e}"))?;
+    if container != CONTAINER_VERSION {
+        return Err(format!(
+            "container version {container}, this build reads {CONTAINER_VERSION}"
+        ));
+    }
+    if technique != key.technique {
+        return Err(format!(
+            "made for technique '{technique}', not '{}'",
+            key.technique
+        ));
+    }
+    if format != key.format_version {
+        return Err(format!(
+            "{technique} format version {format}, this build reads {}",
+            key.format_version
+        ));
+    }
+    if hash != key.hash {
+        return Err(format!(
+            "inputs changed (key {hash:016x}, now {:016x})",
+            key.hash
+        ));
+    }
+    if d.remaining() as u64 != len {
+        return Err(format!(
+            "truncated or padded: payload is {} bytes, header says {len}",
+            d.remaining()
+        ));
+    }
+    let payload = &bytes[bytes.len() - len as usize..];
+    if fnv64(payload) != checksum {
+        return Err("payload checksum mismatch (corrupt file)".into());
+    }
+    Ok(payload.to_vec())
+}
+
+/// Reads `path` and checks it against `key`.
+pub fn read(path: &Path, key: &CacheKey) -> Lookup {
+    match std::fs::read(path) {
+        Ok(bytes) => match decode(&bytes, key) {
+            Ok(p) => Lookup::Hit(p),
+            Err(why) => Lookup::Stale(why),
+        },
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Lookup::Miss,
+        Err(e) => Lookup::Stale(format!("cannot read: {e}")),
+    }
+}
+
+/// Writes an entry atomically: temp file in the same folder, fsync, rename.
+pub fn write(path: &Path, key: &CacheKey, payload: &[u8]) -> std::io::Result<()> {
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    std::fs::create_dir_all(dir)?;
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "bake".into());
+    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
+    let result = (|| {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(&encode(key, payload))?;
+        f.sync_all()?;
+        drop(f);
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn key() -> CacheKey {
+        CacheKey {
+            technique: "boxtree".into(),
+            format_version: 3,
+            hash: 0x1234,
+        }
+    }
+
+    #[test]
+    fn hit_miss_stale() {
+        let dir = std::env::temp_dir().join(format!("sylvan-cache-test-{}", std::process::id()));
+        let path = dir.join(file_name("pine tree", &key()));
+        assert!(
+            path.to_string_lossy()
+                .ends_with("pine_tree-boxtree-0000000000001234.sylbake")
+        );
+        assert!(matches!(read(&path, &key()), Lookup::Miss));
+        write(&path, &key(), b"payload").unwrap();
+        assert!(matches!(read(&path, &key()), Lookup::Hit(p) if p == b"payload"));
+        let other = CacheKey {
+            hash: 0x9999,
+            ..key()
+        };
+        assert!(matches!(read(&path, &other), Lookup::Stale(w) if w.contains("inputs changed")));
+        let newer = CacheKey {
+            format_version: 4,
+            ..key()
+        };
+        assert!(matches!(read(&path, &newer), Lookup::Stale(w) if w.contains("version")));
+        // Every truncation is detected.
+        let full = std::fs::read(&path).unwrap();
+        for cut in 0..full.len() {
+            std::fs::write(&path, &full[..cut]).unwrap();
+            assert!(matches!(read(&path, &key()), Lookup::Stale(_)), "cut {cut}");
+        }
+        // A flipped payload byte is detected.
+        let mut bad = full.clone();
+        *bad.last_mut().unwrap() ^= 1;
+        std::fs::write(&path, &bad).unwrap();
+        assert!(matches!(read(&path, &key()), Lookup::Stale(w) if w.contains("checksum")));
+        // No temp files left behind.
+        let left: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
+        assert_eq!(left.len(), 1);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

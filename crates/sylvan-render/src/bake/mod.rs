@@ -1,0 +1,445 @@
+//! The shared baker: renders a plant, or any subset of its triangles, offscreen on the GPU
+//! from a list of orthographic views into tiles of colour + coverage and normal + depth,
+//! supersampled, then resolves, dilates and mip-maps them on the CPU ([`image`]), and keeps
+//! the result in a versioned, atomically written cache ([`cache`]). Every image-based
+//! technique bakes through here.
+//!
+//! What a tile holds (see [`image::TileImage`]): premultiplied linear albedo with coverage,
+//! and the unit normal facing the bake camera with the depth inside the framed box. Lighting
+//! is *not* baked: techniques light the texels at run time with the same model as the
+//! geometry, so a baked tree stays consistent with the reference when the sun moves.
+
+pub mod cache;
+pub mod codec;
+pub mod image;
+pub mod views;
+
+use crate::RenderError;
+use crate::technique::geometry::GpuMesh;
+use crate::texture::{self, Level};
+use bytemuck::{Pod, Zeroable};
+use image::TileImage;
+use std::ops::Range;
+use sylvan_gpu::{DEPTH_FORMAT, Gpu, layout};
+use sylvan_plant::Plant;
+use views::PlaneFrame;
+
+/// Largest tile the baker makes (texels per side).
+pub const MAX_TILE: u32 = 1024;
+/// Largest supersampling factor per axis.
+pub const MAX_SUPERSAMPLE: u32 = 8;
+
+/// One view to bake: a plane frame seen from one side, and which triangles to draw.
+#[derive(Debug, Clone)]
+pub struct BakeRequest {
+    /// The framed rectangle and projection axes.
+    pub frame: PlaneFrame,
+    /// `1.0`: seen from `+f`; `-1.0`: from `-f`.
+    pub side: f32,
+    /// Index ranges into `plant.leaves.indices`.
+    pub leaves: Vec<Range<u32>>,
+    /// Index ranges into `plant.wood.indices`.
+    pub wood: Vec<Range<u32>>,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuBakeView {
+    view_proj: [[f32; 4]; 4],
+    to_camera: [f32; 4],
+}
+
+const RAW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+/// Bytes of raw samples read back per batch, at most.
+const BATCH_BYTES: u64 = 64 << 20;
+
+/// A plant uploaded for baking.
+pub struct PlantBaker {
+    wood: Option<GpuMesh>,
+    leaves: Option<GpuMesh>,
+    leaf_pipeline: wgpu::RenderPipeline,
+    wood_pipeline: wgpu::RenderPipeline,
+    bind_layout: wgpu::BindGroupLayout,
+    leaf_view: wgpu::TextureView,
+    sampler: wgpu::Sampler,
+    tile: u32,
+    ss: u32,
+}
+
+impl PlantBaker {
+    /// Uploads `plant` to bake tiles of `tile`² texels, each supersampled `ss`² times.
+    pub fn new(gpu: &Gpu, plant: &Plant, tile: u32, ss: u32) -> Result<Self, RenderError> {
+        if !(1..=MAX_TILE).contains(&tile) || !(1..=MAX_SUPERSAMPLE).contains(&ss) {
+            return Err(RenderError::Option(format!(
+                "bake tile {tile} px × supersampling {ss}: the tile must be 1–{MAX_TILE} px and supersampling 1–{MAX_SUPERSAMPLE}"
+            )));
+        }
+        gpu.check_texture_size("bake tile", tile * ss, tile * ss)?;
+        let device = &gpu.device;
+        let tex = &plant.leaf_texture;
+        if tex.width == 0
+            || tex.height == 0
+            || tex.rgba.len() != (tex.width * tex.height * 4) as usize
+        {
+            return Err(RenderError::Plant(format!(
+                "{}: leaf texture size does not match its data",
+                plant.name
+            )));
+        }
+        gpu.check_texture_size("leaf texture", tex.width, tex.height)?;
+        let levels = texture::cutout_mips(Level {
+            width: tex.width,
+            height: tex.height,
+            rgba: tex.rgba.clone(),
+        });
+        let leaf_view =
+            texture::upload(gpu, "bake_leaf_texture", &levels).create_view(&Default::default());
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("bake_sampler"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            mipmap_filter: wgpu::MipmapFilterMode::Linear,
+            ..Default::default()
+        });
+        let bind_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("bake_layout"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { read_only: true },
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                layout::texture(
+                    1,
+                    wgpu::ShaderStages::FRAGMENT,
+                    wgpu::TextureSampleType::Float { filterable: true },
+                    wgpu::TextureViewDimension::D2,
+                ),
+                layout::sampler(
+                    2,
+                    wgpu::ShaderStages::FRAGMENT,
+                    wgpu::SamplerBindingType::Filtering,
+                ),
+            ],
+        });
+        let module = sylvan_gpu::shader(gpu, "bake", include_str!("bake.wgsl"));
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("bake"),
+            bind_group_layouts: &[Some(&bind_layout)],
+            immediate_size: 0,
+        });
+        let targets = [
+            Some(wgpu::ColorTargetState::from(RAW_FORMAT)),
+            Some(wgpu::ColorTargetState::from(RAW_FORMAT)),
+        ];
+        let buffers = [Some(crate::technique::geometry::GpuPlantVertex::LAYOUT)];
+        let make = |fs: &str| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(fs),
+                layout: Some(&pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_bake"),
+                    compilation_options: Default::default(),
+                    buffers: &buffers,
+                },
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some(fs),
+                    compilation_options: Default::default(),
+                    targets: &targets,
+                }),
+                // Two-sided: leaves are cards, and a view from -f mirrors the winding.
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        Ok(Self {
+            wood: GpuMesh::new(gpu, &format!("{} wood", plant.name), &plant.wood)?,
+            leaves: GpuMesh::new(gpu, &format!("{} leaves", plant.name), &plant.leaves)?,
+            leaf_pipeline: make("fs_bake_leaf"),
+            wood_pipeline: make("fs_bake_wood"),
+            bind_layout,
+            leaf_view,
+            sampler,
+            tile,
+            ss,
+        })
+    }
+
+    /// Bakes every request into a resolved tile, in order, calling `progress(done)` after each
+    /// batch. Requests are rendered side by side into one target per batch and read back once.
+    pub fn bake(
+        &self,
+        gpu: &Gpu,
+        requests: &[BakeRequest],
+        mut progress: impl FnMut(usize),
+    ) -> Result<Vec<TileImage>, RenderError> {
+        let px = self.tile * self.ss;
+        let max_dim = gpu.device.limits().max_texture_dimension_2d;
+        let per_sample = 2 * RAW_FORMAT.block_copy_size(None).unwrap_or(16) as u64;
+        let by_bytes = (BATCH_BYTES / (px as u64 * px as u64 * per_sample)).max(1) as u32;
+        let batch = (max_dim / px).min(by_bytes).max(1) as usize;
+        let mut out = Vec::with_capacity(requests.len());
+        for chunk in requests.chunks(batch) {
+            out.extend(self.bake_batch(gpu, chunk)?);
+            progress(out.len());
+        }
+        Ok(out)
+    }
+
+    fn bake_batch(
+        &self,
+        gpu: &Gpu,
+        requests: &[BakeRequest],
+    ) -> Result<Vec<TileImage>, RenderError> {
+        let device = &gpu.device;
+        let px = self.tile * self.ss;
+        let width = px * requests.len() as u32;
+        let raw: Vec<GpuBakeView> = requests
+            .iter()
+            .map(|r| GpuBakeView {
+                view_proj: r.frame.view_proj(r.side).to_cols_array_2d(),
+                to_camera: (r.frame.f * r.side).extend(0.0).to_array(),
+            })
+            .collect();
+        let views = wgpu::util::DeviceExt::create_buffer_init(
+            device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some("bake_views"),
+                contents: bytemuck::cast_slice(&raw),
+                usage: wgpu::BufferUsages::STORAGE,
+            },
+        );
+        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("bake_bind"),
+            layout: &self.bind_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: views.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&self.leaf_view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::Sampler(&self.sampler),
+                },
+            ],
+        });
+        let make = |label, format| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width,
+                    height: px,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            })
+        };
+        let color = make("bake_color", RAW_FORMAT);
+        let normal = make("bake_normal", RAW_FORMAT);
+        let depth = make("bake_depth", DEPTH_FORMAT);
+        let (cv, nv, dv) = (
+            color.create_view(&Default::default()),
+            normal.create_view(&Default::default()),
+            depth.create_view(&Default::default()),
+        );
+        let mut encoder = device.create_command_encoder(&Default::default());
+        {
+            let clear = |view| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            };
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("bake_pass"),
+                color_attachments: &[clear(&cv), clear(&nv)],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &dv,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_bind_group(0, &bind, &[]);
+            for (i, r) in requests.iter().enumerate() {
+                let x = (i as u32 * px) as f32;
+                pass.set_viewport(x, 0.0, px as f32, px as f32, 0.0, 1.0);
+                pass.set_scissor_rect(i as u32 * px, 0, px, px);
+                let view = i as u32..i as u32 + 1;
+                for (mesh, pipeline, ranges) in [
+                    (&self.wood, &self.wood_pipeline, &r.wood),
+                    (&self.leaves, &self.leaf_pipeline, &r.leaves),
+                ] {
+                    let Some(mesh) = mesh else { continue };
+                    pass.set_pipeline(pipeline);
+                    pass.set_vertex_buffer(0, mesh.vertices.slice(..));
+                    pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
+                    for range in ranges.iter().filter(|r| !r.is_empty()) {
+                        if range.end > mesh.index_count {
+                            return Err(RenderError::Plant(format!(
+                                "bake range {range:?} exceeds the mesh's {} indices",
+                                mesh.index_count
+                            )));
+                        }
+                        pass.draw_indexed(range.clone(), 0, view.clone());
+                    }
+                }
+            }
+        }
+        gpu.queue.submit([encoder.finish()]);
+        let floats = |t: &wgpu::Texture| -> Result<Vec<[f32; 4]>, RenderError> {
+            let bytes = sylvan_gpu::read_texture_bytes(gpu, t)?;
+            Ok(bytemuck::pod_collect_to_vec(&bytes))
+        };
+        let (rc, rn) = (floats(&color)?, floats(&normal)?);
+        gpu.check()?;
+        Ok((0..requests.len())
+            .map(|i| {
+                TileImage::resolve(
+                    &rc,
+                    &rn,
+                    width as usize,
+                    i * px as usize,
+                    self.tile,
+                    self.ss,
+                )
+            })
+            .collect())
+    }
+}
+
+/// Where baked assets are cached.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub enum CachePolicy {
+    /// The default folder ([`cache::default_dir`]).
+    #[default]
+    Default,
+    /// This folder.
+    Dir(std::path::PathBuf),
+    /// Exactly this file (`sylvan bake --out`).
+    File(std::path::PathBuf),
+    /// Always bake, never read or write files.
+    Off,
+}
+
+/// How one plant's asset was obtained.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BakeReport {
+    /// Plant name.
+    pub plant: String,
+    /// Read from the cache (no GPU work).
+    pub from_cache: bool,
+    /// Milliseconds spent baking or reading.
+    pub ms: f64,
+    /// The cache file, when caching is on.
+    pub path: Option<std::path::PathBuf>,
+    /// Why an existing file was not used (re-baked), if one existed.
+    pub stale: Option<String>,
+    /// Payload bytes.
+    pub bytes: u64,
+}
+
+/// Returns `R`'s baked asset for `plant`: from the cache when a file with the same inputs
+/// exists, else baked on the GPU and written atomically. A stale, truncated or corrupt file is
+/// reported in [`BakeReport::stale`] and replaced. `progress(done, total)` follows the bake.
+pub fn load_or_bake<R: crate::technique::Representation>(
+    gpu: &Gpu,
+    plant: &Plant,
+    params: &R::Params,
+    policy: &CachePolicy,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<(R::Baked, BakeReport), RenderError> {
+    let start = std::time::Instant::now();
+    let key = cache::CacheKey {
+        technique: R::NAME.to_string(),
+        format_version: R::FORMAT_VERSION,
+        hash: R::input_hash(plant, params),
+    };
+    let path = match policy {
+        CachePolicy::Default => {
+            Some(cache::default_dir().join(cache::file_name(&plant.name, &key)))
+        }
+        CachePolicy::Dir(d) => Some(d.join(cache::file_name(&plant.name, &key))),
+        CachePolicy::File(f) => Some(f.clone()),
+        CachePolicy::Off => None,
+    };
+    let mut stale = None;
+    if let Some(p) = &path {
+        match cache::read(p, &key) {
+            cache::Lookup::Hit(payload) => match R::decode(&payload) {
+                Ok(baked) => {
+                    return Ok((
+                        baked,
+                        BakeReport {
+                            plant: plant.name.clone(),
+                            from_cache: true,
+                            ms: start.elapsed().as_secs_f64() * 1e3,
+                            path: path.clone(),
+                            stale: None,
+                            bytes: payload.len() as u64,
+                        },
+                    ));
+                }
+                Err(e) => stale = Some(format!("payload does not decode: {e}")),
+            },
+            cache::Lookup::Miss => {}
+            cache::Lookup::Stale(why) => stale = Some(why),
+        }
+    }
+    let baked = R::bake(gpu, plant, params, progress)?;
+    let payload = R::encode(&baked);
+    if let Some(p) = &path {
+        cache::write(p, &key, &payload).map_err(|e| {
+            RenderError::Option(format!(
+                "{}: cannot write the bake cache: {e} — set SYLVAN_CACHE_DIR to a writable folder",
+                p.display()
+            ))
+        })?;
+    }
+    Ok((
+        baked,
+        BakeReport {
+            plant: plant.name.clone(),
+            from_cache: false,
+            ms: start.elapsed().as_secs_f64() * 1e3,
+            path,
+            stale,
+            bytes: payload.len() as u64,
+        },
+    ))
+}

@@ -1,0 +1,570 @@
+//! LCV04 §3.2: choosing the boxes that get images (§3.2.4), baking six images per box (§3.2.2,
+//! §3.2.3), and laying the plant's triangles out so that what a box leaves as geometry when
+//! it is opened is one contiguous index range.
+
+use super::BoxTreeParams;
+use crate::RenderError;
+use crate::bake::codec::{DecodeError, Decoder, Encoder, Fnv64};
+use crate::bake::image::TileLevel;
+use crate::bake::views::{PlaneFrame, PlaneLayout};
+use crate::bake::{BakeRequest, PlantBaker};
+use glam::Vec3;
+use std::ops::Range;
+use sylvan_gpu::Gpu;
+use sylvan_plant::Plant;
+
+/// Bumped whenever the payload below, the baker's output, or the selection changes.
+pub const FORMAT_VERSION: u32 = 1;
+
+/// One textured box of the box tree.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BakedBox {
+    /// The plant hierarchy node whose subtree the box bounds.
+    pub node: u32,
+    /// Parent box (`u32::MAX` for the root box).
+    pub parent: u32,
+    /// Textured boxes directly below this one.
+    pub children: Vec<u32>,
+    /// Model-space box minimum (metres).
+    pub min: [f32; 3],
+    /// Model-space box maximum.
+    pub max: [f32; 3],
+    /// What this box leaves as real geometry when opened: a range of the re-ordered leaf
+    /// indices (leaves in no textured child box).
+    pub residual_leaves: Range<u32>,
+    /// Same for wood (with `bake_wood`; without, all wood is always geometry).
+    pub residual_wood: Range<u32>,
+    /// Metres per texel of this box's images (largest plane extent / tile size): with the
+    /// view's pixels-per-metre it gives the LOD distance (LCV04 §4.1).
+    pub metres_per_texel: f32,
+    /// Leaves inside the box.
+    pub leaves: u32,
+}
+
+/// The baked asset of one plant: the box tree, the re-ordered indices and the images.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BoxTreeBaked {
+    /// Tile size in texels.
+    pub tile: u32,
+    /// The plane arrangement the images were baked for.
+    pub layout: PlaneLayout,
+    /// Whether box images include the wood inside the box.
+    pub bake_wood: bool,
+    /// Textured boxes, root first, parents before children.
+    pub boxes: Vec<BakedBox>,
+    /// `plant.leaves.indices` re-ordered so each box's residual leaves are contiguous.
+    pub leaf_indices: Vec<u32>,
+    /// `plant.wood.indices` re-ordered likewise.
+    pub wood_indices: Vec<u32>,
+    /// `tiles[box * images_per_box + image]`: the mip chain of each image.
+    pub tiles: Vec<Vec<TileLevel>>,
+}
+
+impl BoxTreeBaked {
+    /// Images per box.
+    pub fn images_per_box(&self) -> u32 {
+        self.layout.images()
+    }
+
+    /// Bytes of image data (all mips, colour and normal).
+    pub fn image_bytes(&self) -> u64 {
+        self.tiles
+            .iter()
+            .flatten()
+            .map(|l| (l.color.len() + l.normal.len()) as u64)
+            .sum()
+    }
+
+    /// The payload written to the cache.
+    pub fn encode(&self) -> Vec<u8> {
+        let mut e = Encoder::default();
+        e.u32(self.tile);
+        e.str(self.layout.name());
+        e.u32(self.bake_wood as u32);
+        e.u64(self.boxes.len() as u64);
+        for b in &self.boxes {
+            e.u32(b.node);
+            e.u32(b.parent);
+            e.u32s(&b.children);
+            e.f32s(&b.min);
+            e.f32s(&b.max);
+            e.u32s(&[
+                b.residual_leaves.start,
+                b.residual_leaves.end,
+                b.residual_wood.start,
+                b.residual_wood.end,
+                b.leaves,
+            ]);
+            e.f32(b.metres_per_texel);
+        }
+        e.u32s(&self.leaf_indices);
+        e.u32s(&self.wood_indices);
+        e.u64(self.tiles.len() as u64);
+        for levels in &self.tiles {
+            e.u64(levels.len() as u64);
+            for l in levels {
+                e.u32(l.size);
+                e.bytes(&l.color);
+                e.bytes(&l.normal);
+            }
+        }
+        e.buf
+    }
+
+    /// Reads a payload back, checking every count and range against the rest.
+    pub fn decode(bytes: &[u8]) -> Result<Self, DecodeError> {
+        let bad = |m: String| DecodeError(m);
+        let mut d = Decoder::new(bytes);
+        let tile = d.u32()?;
+        let layout_name = d.str()?;
+        let layout = PlaneLayout::parse(&layout_name)
+            .ok_or_else(|| bad(format!("unknown plane layout '{layout_name}'")))?;
+        let bake_wood = d.u32()? != 0;
+        let nboxes = d.u64()?;
+        if nboxes == 0 || nboxes > super::MAX_BOXES as u64 {
+            return Err(bad(format!(
+                "{nboxes} boxes (1–{} allowed)",
+                super::MAX_BOXES
+            )));
+        }
+        let mut boxes = Vec::with_capacity(nboxes as usize);
+        for _ in 0..nboxes {
+            let node = d.u32()?;
+            let parent = d.u32()?;
+            let children = d.u32s()?;
+            let arr3 = |v: Vec<f32>| -> Result<[f32; 3], DecodeError> {
+                v.try_into()
+                    .map_err(|_| DecodeError("box corner is not 3 floats".into()))
+            };
+            let min = arr3(d.f32s()?)?;
+            let max = arr3(d.f32s()?)?;
+            let r = d.u32s()?;
+            if r.len() != 5 {
+                return Err(bad("box ranges are not 5 integers".into()));
+            }
+            let metres_per_texel = d.f32()?;
+            boxes.push(BakedBox {
+                node,
+                parent,
+                children,
+                min,
+                max,
+                residual_leaves: r[0]..r[1],
+                residual_wood: r[2]..r[3],
+                leaves: r[4],
+                metres_per_texel,
+            });
+        }
+        let leaf_indices = d.u32s()?;
+        let wood_indices = d.u32s()?;
+        let ntiles = d.u64()?;
+        if ntiles != nboxes * layout.images() as u64 {
+            return Err(bad(format!(
+                "{ntiles} images for {nboxes} boxes × {}",
+                layout.images()
+            )));
+        }
+        let mut tiles = Vec::with_capacity(ntiles as usize);
+        for _ in 0..ntiles {
+            let nlev = d.u64()?;
+            if nlev != tile.max(1).ilog2() as u64 + 1 {
+                return Err(bad(format!("{nlev} mip levels for a {tile}-texel tile")));
+            }
+            let mut levels = Vec::with_capacity(nlev as usize);
+            for m in 0..nlev {
+                let size = d.u32()?;
+                let color = d.bytes()?.to_vec();
+                let normal = d.bytes()?.to_vec();
+                let want = (tile >> m).max(1);
+                if size != want
+                    || color.len() != (size * size * 4) as usize
+                    || normal.len() != color.len()
+                {
+                    return Err(bad(format!("mip {m} has the wrong size")));
+                }
+                levels.push(TileLevel {
+                    size,
+                    color,
+                    normal,
+                });
+            }
+            tiles.push(levels);
+        }
+        d.finish()?;
+        let baked = Self {
+            tile,
+            layout,
+            bake_wood,
+            boxes,
+            leaf_indices,
+            wood_indices,
+            tiles,
+        };
+        baked.validate().map_err(DecodeError)?;
+        Ok(baked)
+    }
+
+    /// Structural checks: parents before children, ranges inside the index arrays.
+    fn validate(&self) -> Result<(), String> {
+        let n = self.boxes.len() as u32;
+        for (i, b) in self.boxes.iter().enumerate() {
+            if (i == 0) != (b.parent == u32::MAX) || (i > 0 && b.parent >= i as u32) {
+                return Err(format!("box {i} has parent {}", b.parent));
+            }
+            if b.children.iter().any(|&c| c <= i as u32 || c >= n) {
+                return Err(format!("box {i} has a child out of order"));
+            }
+            if b.residual_leaves.end > self.leaf_indices.len() as u32
+                || b.residual_wood.end > self.wood_indices.len() as u32
+                || b.residual_leaves.start > b.residual_leaves.end
+                || b.residual_wood.start > b.residual_wood.end
+            {
+                return Err(format!("box {i} has a residual range outside the indices"));
+            }
+            if !(b.metres_per_texel.is_finite() && b.metres_per_texel > 0.0) {
+                return Err(format!("box {i} has no valid texel size"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The content hash of everything a bake depends on.
+pub fn input_hash(plant: &Plant, p: &BoxTreeParams) -> u64 {
+    let mut h = Fnv64::default();
+    h.field(b"boxtree")
+        .u32s(&[FORMAT_VERSION, crate::bake::cache::CONTAINER_VERSION])
+        .u32s(&[
+            p.tile,
+            p.supersample,
+            p.bake_wood as u32,
+            p.min_leaves,
+            p.max_boxes,
+        ])
+        .field(p.layout.name().as_bytes())
+        .f32s(&[p.volume_threshold]);
+    for mesh in [&plant.wood, &plant.leaves] {
+        h.f32s(bytemuck::cast_slice(&mesh.positions))
+            .f32s(bytemuck::cast_slice(&mesh.normals))
+            .f32s(bytemuck::cast_slice(&mesh.uvs))
+            .f32s(bytemuck::cast_slice(&mesh.colors))
+            .u32s(&mesh.indices);
+    }
+    let t = &plant.leaf_texture;
+    h.u32s(&[t.width, t.height]).field(&t.rgba);
+    for n in &plant.hierarchy.nodes {
+        h.u32s(&[
+            n.parent.unwrap_or(u32::MAX),
+            n.leaf_indices.start,
+            n.leaf_indices.end,
+            n.wood_indices.start,
+            n.wood_indices.end,
+        ])
+        .f32s(&n.bbox_min)
+        .f32s(&n.bbox_max);
+    }
+    h.finish()
+}
+
+/// A box chosen for images, before baking.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Selected {
+    /// Hierarchy node.
+    pub node: u32,
+    /// Parent selected box (`u32::MAX` for the root).
+    pub parent: u32,
+}
+
+fn volume(min: [f32; 3], max: [f32; 3], floor: f32) -> f32 {
+    (0..3).map(|i| (max[i] - min[i]).max(floor)).product()
+}
+
+/// Boxes whose volume is more than this fraction of the nearest textured box above them are
+/// near-duplicates (they would open at almost the same distance) and get no images.
+pub const MAX_VOLUME_RATIO: f32 = 0.5;
+
+/// LCV04 §3.2.4: the root box always gets images; another node's box gets images when its
+/// volume is at least `threshold` × the volume of the nearest box above it that has images,
+/// and it holds at least `min_leaves` leaves. At most `max_boxes` boxes, in hierarchy order.
+///
+/// Deviations: the paper compares with the node's *parent* box; comparing with the nearest
+/// *textured* ancestor stops chains of small nested twigs from each getting images. Boxes above
+/// [`MAX_VOLUME_RATIO`] of that ancestor are skipped as near-duplicates (a monopodial branch's
+/// nested continuations are each ~0.9 of the one before). Box extents are floored at 5% of the
+/// plant's largest extent so flat boxes are not volume-less.
+pub fn select_boxes(
+    plant: &Plant,
+    threshold: f32,
+    min_leaves: u32,
+    max_boxes: u32,
+) -> Vec<Selected> {
+    let nodes = &plant.hierarchy.nodes;
+    if nodes.is_empty() {
+        return vec![Selected {
+            node: u32::MAX,
+            parent: u32::MAX,
+        }];
+    }
+    let ext = (0..3)
+        .map(|i| plant.bbox_max[i] - plant.bbox_min[i])
+        .fold(0.0f32, f32::max);
+    let floor = (ext * 0.05).max(1e-3);
+    let mut textured: Vec<Option<u32>> = vec![None; nodes.len()];
+    let mut out = vec![Selected {
+        node: 0,
+        parent: u32::MAX,
+    }];
+    textured[0] = Some(0);
+    for (i, n) in nodes.iter().enumerate().skip(1) {
+        // Nearest textured ancestor (parents come before children).
+        let mut a = n.parent;
+        let anc = loop {
+            match a {
+                Some(p) => match textured[p as usize] {
+                    Some(t) => break t,
+                    None => a = nodes[p as usize].parent,
+                },
+                None => break 0,
+            }
+        };
+        let anc_node = &nodes[out[anc as usize].node as usize];
+        let ratio = volume(n.bbox_min, n.bbox_max, floor)
+            / volume(anc_node.bbox_min, anc_node.bbox_max, floor);
+        if out.len() < max_boxes as usize
+            && ratio >= threshold
+            && ratio <= MAX_VOLUME_RATIO
+            && n.leaves.len() as u32 >= min_leaves
+        {
+            textured[i] = Some(out.len() as u32);
+            out.push(Selected {
+                node: i as u32,
+                parent: anc,
+            });
+        }
+    }
+    out
+}
+
+/// Index ranges of `whole` not covered by any of `holes` (sorted, disjoint, inside `whole`).
+fn gaps(whole: Range<u32>, mut holes: Vec<Range<u32>>) -> Vec<Range<u32>> {
+    holes.sort_by_key(|r| r.start);
+    let mut out = Vec::new();
+    let mut at = whole.start;
+    for h in holes {
+        if h.start > at {
+            out.push(at..h.start);
+        }
+        at = at.max(h.end);
+    }
+    if at < whole.end {
+        out.push(at..whole.end);
+    }
+    out
+}
+
+/// The box tree without images: boxes, residual ranges, re-ordered indices, and the bake
+/// requests (box-major, image-minor). GPU-free.
+pub struct Layout {
+    /// Boxes (images not yet baked).
+    pub boxes: Vec<BakedBox>,
+    /// Re-ordered leaf indices.
+    pub leaf_indices: Vec<u32>,
+    /// Re-ordered wood indices.
+    pub wood_indices: Vec<u32>,
+    /// One request per image.
+    pub requests: Vec<BakeRequest>,
+}
+
+/// Lays out the box tree of `plant` for `p`.
+pub fn layout(plant: &Plant, p: &BoxTreeParams) -> Layout {
+    let selected = select_boxes(plant, p.volume_threshold, p.min_leaves, p.max_boxes);
+    let nodes = &plant.hierarchy.nodes;
+    let whole_leaves = 0..plant.leaves.indices.len() as u32;
+    let whole_wood = 0..plant.wood.indices.len() as u32;
+    // Subtree ranges per selected box; a plant without hierarchy is one box.
+    let ranges = |s: &Selected| -> (Range<u32>, Range<u32>, [f32; 3], [f32; 3], u32) {
+        match nodes.get(s.node as usize) {
+            Some(n) => (
+                n.leaf_indices.clone(),
+                n.wood_indices.clone(),
+                n.bbox_min,
+                n.bbox_max,
+                n.leaves.len() as u32,
+            ),
+            None => (
+                whole_leaves.clone(),
+                whole_wood.clone(),
+                plant.bbox_min,
+                plant.bbox_max,
+                plant.leaf_count as u32,
+            ),
+        }
+    };
+    let mut boxes: Vec<BakedBox> = selected
+        .iter()
+        .map(|s| {
+            let (_, _, min, max, leaves) = ranges(s);
+            BakedBox {
+                node: s.node,
+                parent: s.parent,
+                children: Vec::new(),
+                min,
+                max,
+                residual_leaves: 0..0,
+                residual_wood: 0..0,
+                metres_per_texel: 0.0,
+                leaves,
+            }
+        })
+        .collect();
+    for i in 1..boxes.len() {
+        let parent = boxes[i].parent as usize;
+        boxes[parent].children.push(i as u32);
+    }
+    // The root box covers the whole plant (wood and leaves), whatever node 0 says.
+    boxes[0].min = plant.bbox_min;
+    boxes[0].max = plant.bbox_max;
+    // Depth-first: a box's residual triangles, then its children's subtrees.
+    let mut leaf_indices = Vec::with_capacity(plant.leaves.indices.len());
+    let mut wood_indices = Vec::with_capacity(plant.wood.indices.len());
+    let mut stack = vec![0usize];
+    while let Some(b) = stack.pop() {
+        let (leaves, wood, ..) = if b == 0 {
+            (
+                whole_leaves.clone(),
+                whole_wood.clone(),
+                [0.0; 3],
+                [0.0; 3],
+                0,
+            )
+        } else {
+            ranges(&selected[b])
+        };
+        let kids: Vec<&Selected> = boxes[b]
+            .children
+            .iter()
+            .map(|&c| &selected[c as usize])
+            .collect();
+        let start = leaf_indices.len() as u32;
+        for g in gaps(leaves, kids.iter().map(|k| ranges(k).0).collect()) {
+            leaf_indices.extend_from_slice(&plant.leaves.indices[g.start as usize..g.end as usize]);
+        }
+        boxes[b].residual_leaves = start..leaf_indices.len() as u32;
+        let start = wood_indices.len() as u32;
+        for g in gaps(wood, kids.iter().map(|k| ranges(k).1).collect()) {
+            wood_indices.extend_from_slice(&plant.wood.indices[g.start as usize..g.end as usize]);
+        }
+        boxes[b].residual_wood = start..wood_indices.len() as u32;
+        stack.extend(boxes[b].children.iter().rev().map(|&c| c as usize));
+    }
+    let normals = p.layout.normals();
+    let mut requests = Vec::new();
+    for (b, s) in boxes.iter_mut().zip(&selected) {
+        let (min, max) = (Vec3::from(b.min), Vec3::from(b.max));
+        let (leaves, wood) = if s.node == 0 || s.node == u32::MAX {
+            (whole_leaves.clone(), whole_wood.clone())
+        } else {
+            let (l, w, ..) = ranges(s);
+            (l, w)
+        };
+        let mut largest = 0.0f32;
+        for &n in &normals {
+            let frame = PlaneFrame::for_box(n, min, max);
+            largest = largest.max(frame.half.x.max(frame.half.y) * 2.0);
+            for side in [1.0, -1.0].into_iter().take(p.layout.sides() as usize) {
+                requests.push(BakeRequest {
+                    frame,
+                    side,
+                    leaves: vec![leaves.clone()],
+                    wood: if p.bake_wood {
+                        vec![wood.clone()]
+                    } else {
+                        vec![]
+                    },
+                });
+            }
+        }
+        b.metres_per_texel = (largest / p.tile as f32).max(1e-6);
+    }
+    Layout {
+        boxes,
+        leaf_indices,
+        wood_indices,
+        requests,
+    }
+}
+
+/// Bakes `plant`: layout, then every image on the GPU. `progress(done, total)` is called as
+/// images complete.
+pub fn bake(
+    gpu: &Gpu,
+    plant: &Plant,
+    p: &BoxTreeParams,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<BoxTreeBaked, RenderError> {
+    p.validate()?;
+    let l = layout(plant, p);
+    let baker = PlantBaker::new(gpu, plant, p.tile, p.supersample)?;
+    let total = l.requests.len();
+    let images = baker.bake(gpu, &l.requests, |done| progress(done, total))?;
+    Ok(BoxTreeBaked {
+        tile: p.tile,
+        layout: p.layout,
+        bake_wood: p.bake_wood,
+        boxes: l.boxes,
+        leaf_indices: l.leaf_indices,
+        wood_indices: l.wood_indices,
+        tiles: images.iter().map(|t| t.levels()).collect(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gaps_between_holes() {
+        assert_eq!(gaps(0..10, vec![6..8, 2..4]), vec![0..2, 4..6, 8..10]);
+        let whole: Vec<Range<u32>> = std::iter::once(0..4).collect();
+        assert_eq!(gaps(0..4, whole), Vec::<Range<u32>>::new());
+        assert_eq!(gaps(3..9, vec![]), vec![3..9]);
+    }
+
+    #[test]
+    fn layout_partitions_the_plant() {
+        let plant = sylvan_plant::preset("pine").unwrap();
+        let p = BoxTreeParams::default();
+        let l = layout(&plant, &p);
+        assert!(l.boxes.len() > 1, "pine should get more than the root box");
+        // Re-ordering is a permutation of triangles.
+        let sorted = |v: &[u32]| {
+            let mut t: Vec<[u32; 3]> = v.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
+            t.sort();
+            t
+        };
+        assert_eq!(sorted(&l.leaf_indices), sorted(&plant.leaves.indices));
+        assert_eq!(sorted(&l.wood_indices), sorted(&plant.wood.indices));
+        // Each box's subtree (its residual plus its descendants' residuals) is all its leaves.
+        fn subtree(l: &Layout, b: usize) -> u32 {
+            l.boxes[b].residual_leaves.len() as u32
+                + l.boxes[b]
+                    .children
+                    .iter()
+                    .map(|&c| subtree(l, c as usize))
+                    .sum::<u32>()
+        }
+        for (i, b) in l.boxes.iter().enumerate() {
+            assert_eq!(subtree(&l, i), b.leaves * 6, "box {i}");
+            assert!(b.residual_leaves.start % 3 == 0 && b.residual_leaves.end % 3 == 0);
+        }
+        assert_eq!(l.requests.len(), l.boxes.len() * p.layout.images() as usize);
+        // Higher thresholds give fewer boxes (LCV04 §3.2.4's storage/realism trade-off).
+        let few = select_boxes(&plant, 0.4, p.min_leaves, p.max_boxes).len();
+        let many = select_boxes(&plant, 0.001, p.min_leaves, p.max_boxes).len();
+        assert!(
+            few <= l.boxes.len() && l.boxes.len() <= many,
+            "{few} {} {many}",
+            l.boxes.len()
+        );
+    }
+}

@@ -1,0 +1,215 @@
+// Technique `boxtree` (LCV04 §4): a box's images drawn on its planes through the box centre,
+// lit per texel with the same model as the geometry (albedo, normal and depth are baked; light
+// is not), blended back to front with premultiplied alpha.
+
+const MAX_PLANES: u32 = 6u;
+
+struct Plane {
+    // xyz: plane centre (model space); w: half extent along f.
+    centre: vec4<f32>,
+    // xyz: image right axis; w: half extent along u.
+    u: vec4<f32>,
+    // xyz: image up axis; w: half extent along v.
+    v: vec4<f32>,
+    // xyz: plane normal (the front image is seen from +f).
+    f: vec4<f32>,
+};
+
+struct Box {
+    planes: array<Plane, 6>,
+    // The plant's bounding box (for the crown occlusion term, as in the geometry).
+    plant_min: vec4<f32>,
+    plant_max: vec4<f32>,
+    // x: first tile; y: images per plane (1 or 2); z: planes.
+    info: vec4<u32>,
+};
+
+struct Atlas {
+    // x: tile texels; y: tiles per row; z: tiles per layer; w: unused.
+    tiles: vec4<u32>,
+    // x: leaf translucency; y: 1 / tiles per row.
+    params: vec4<f32>,
+};
+
+@group(1) @binding(0) var<storage, read> boxes: array<Box>;
+@group(1) @binding(1) var atlas_color: texture_2d_array<f32>;
+@group(1) @binding(2) var atlas_normal: texture_2d_array<f32>;
+@group(1) @binding(3) var atlas_sampler: sampler;
+@group(1) @binding(4) var<uniform> atlas: Atlas;
+
+struct ImpostorIn {
+    @builtin(vertex_index) vertex: u32,
+    // Instance: xyz trunk base, w uniform scale.
+    @location(4) base_scale: vec4<f32>,
+    // Instance: x cos(rotation), y sin(rotation), z tint seed, w presence.
+    @location(5) rot: vec4<f32>,
+    @location(6) box_index: u32,
+};
+
+struct ImpostorOut {
+    @builtin(position) pos: vec4<f32>,
+    @location(0) uv: vec2<f32>,
+    @location(1) world: vec3<f32>,
+    // Model-space point on the plane.
+    @location(2) model: vec3<f32>,
+    // x: box; y: plane; z: side (1 front, 0 back).
+    @location(3) @interpolate(flat) ids: vec3<u32>,
+    // x: presence × plane weight; y: tint seed; z: cos; w: sin.
+    @location(4) @interpolate(flat) weight: vec4<f32>,
+    // The tree's uniform scale.
+    @location(5) @interpolate(flat) scale: f32,
+};
+
+fn to_world(p: vec3<f32>, base_scale: vec4<f32>, rot: vec4<f32>) -> vec3<f32> {
+    let q = p * base_scale.w;
+    return vec3<f32>(rot.x * q.x + rot.y * q.z, q.y, -rot.y * q.x + rot.x * q.z) + base_scale.xyz;
+}
+
+// World direction → model space (inverse rotation about Y).
+fn to_model_dir(d: vec3<f32>, rot: vec4<f32>) -> vec3<f32> {
+    return vec3<f32>(rot.x * d.x - rot.y * d.z, d.y, rot.y * d.x + rot.x * d.z);
+}
+
+fn to_world_dir(d: vec3<f32>, rot: vec4<f32>) -> vec3<f32> {
+    return vec3<f32>(rot.x * d.x + rot.y * d.z, d.y, -rot.y * d.x + rot.x * d.z);
+}
+
+// One plane's corner; `toward` is the model-space unit direction the box is seen from (the
+// eye, or the sun for shadows). Each plane's optical depth is weighted by (toward·f)², the
+// weights normalised to sum to 1, so a plane seen edge-on vanishes and one seen face-on
+// carries the whole box (exact along the baked directions).
+fn impostor_vertex(in: ImpostorIn, toward_world: vec3<f32>, view_proj: mat4x4<f32>, is_dir: bool) -> ImpostorOut {
+    var out: ImpostorOut;
+    let b = boxes[in.box_index];
+    let plane = in.vertex / 6u;
+    let corner = in.vertex % 6u;
+    if (plane >= b.info.z) {
+        out.pos = vec4<f32>(0.0, 0.0, -2.0, 1.0);
+        return out;
+    }
+    let p = b.planes[plane];
+    var toward = toward_world;
+    if (!is_dir) {
+        toward = toward_world - to_world(b.planes[0].centre.xyz, in.base_scale, in.rot);
+    }
+    let d = normalize(to_model_dir(toward, in.rot));
+    var total = 0.0;
+    for (var i = 0u; i < b.info.z; i = i + 1u) {
+        let c = dot(d, b.planes[i].f.xyz);
+        total = total + c * c;
+    }
+    let c = dot(d, p.f.xyz);
+    let w = c * c / max(total, 1e-6);
+    let st = array<vec2<f32>, 6>(
+        vec2<f32>(0.0, 1.0), vec2<f32>(1.0, 1.0), vec2<f32>(1.0, 0.0),
+        vec2<f32>(0.0, 1.0), vec2<f32>(1.0, 0.0), vec2<f32>(0.0, 0.0),
+    )[corner];
+    let model = p.centre.xyz + p.u.xyz * ((2.0 * st.x - 1.0) * p.u.w) + p.v.xyz * ((1.0 - 2.0 * st.y) * p.v.w);
+    let world = to_world(model, in.base_scale, in.rot);
+    out.pos = view_proj * vec4<f32>(world, 1.0);
+    out.uv = st;
+    out.world = world;
+    out.model = model;
+    out.ids = vec3<u32>(in.box_index, plane, select(0u, 1u, c >= 0.0));
+    out.weight = vec4<f32>(w * in.rot.w, in.rot.z, in.rot.x, in.rot.y);
+    out.scale = in.base_scale.w;
+    return out;
+}
+
+struct Texel {
+    // Premultiplied albedo, coverage.
+    color: vec4<f32>,
+    // Unit normal (model space, facing the viewer's side), depth in the box.
+    normal_depth: vec4<f32>,
+    // Which image: 1 front, 0 back, 2 front seen mirrored from behind.
+    image: u32,
+};
+
+fn fetch(in: ImpostorOut) -> Texel {
+    let b = boxes[in.ids.x];
+    let sides = b.info.y;
+    var image = 1u;
+    var tile = b.info.x + in.ids.y * sides;
+    if (in.ids.z == 0u) {
+        if (sides == 2u) {
+            tile = tile + 1u;
+            image = 0u;
+        } else {
+            image = 2u;
+        }
+    }
+    let per_row = atlas.tiles.y;
+    let in_layer = tile % atlas.tiles.z;
+    let cell = vec2<f32>(f32(in_layer % per_row), f32(in_layer / per_row));
+    let uv = (cell + clamp(in.uv, vec2<f32>(0.0), vec2<f32>(1.0))) * atlas.params.y;
+    let layer = i32(tile / atlas.tiles.z);
+    var t: Texel;
+    t.color = textureSample(atlas_color, atlas_sampler, uv, layer);
+    t.normal_depth = textureSample(atlas_normal, atlas_sampler, uv, layer);
+    t.image = image;
+    return t;
+}
+
+// Opacity of this plane's texel: the texel's optical depth scaled by the plane's weight.
+fn plane_alpha(alpha: f32, weight: f32) -> f32 {
+    return 1.0 - pow(1.0 - min(alpha, 0.995), weight);
+}
+
+@vertex
+fn vs_impostor(in: ImpostorIn) -> ImpostorOut {
+    return impostor_vertex(in, frame.camera.xyz, frame.view_proj, false);
+}
+
+@fragment
+fn fs_impostor(in: ImpostorOut) -> @location(0) vec4<f32> {
+    let t = fetch(in);
+    let alpha = t.color.a;
+    if (alpha < 0.004) {
+        discard;
+    }
+    let a = plane_alpha(alpha, in.weight.x);
+    if (a < 0.002) {
+        discard;
+    }
+    let b = boxes[in.ids.x];
+    let p = b.planes[in.ids.y];
+    var n = normalize(t.normal_depth.xyz * 2.0 - 1.0);
+    if (t.image == 2u) {
+        // Mirrored use of the front image: reflect the normal through the plane.
+        n = n - 2.0 * dot(n, p.f.xyz) * p.f.xyz;
+    }
+    // Where the texel's surface is: on the plane, moved along f by its baked depth.
+    let side = select(-1.0, 1.0, t.image != 0u);
+    let model = in.model + p.f.xyz * side * p.centre.w * (1.0 - 2.0 * t.normal_depth.w);
+    let rot = vec4<f32>(in.weight.z, in.weight.w, 0.0, 0.0);
+    let world = in.world + to_world_dir(model - in.model, rot) * in.scale;
+    let nw = normalize(to_world_dir(n, rot));
+
+    let tint = 0.85 + 0.3 * in.weight.y;
+    let albedo = t.color.rgb * vec3<f32>(tint, mix(tint, 1.0, 0.5), 1.0);
+    let l = frame.sun_dir.xyz;
+    let ndl = dot(nw, l);
+    let vis = sun_visibility(world, vec3<f32>(0.0));
+    let transmitted = albedo * vec3<f32>(1.1, 1.25, 0.55) * atlas.params.x * max(-ndl, 0.0);
+    let direct = frame.sun_color.rgb * (albedo * max(ndl, 0.0) + transmitted) * vis;
+    let ambient = albedo * sky_light(nw) * crown_occlusion(model, b.plant_min.xyz, b.plant_max.xyz);
+    // Fog on premultiplied colour: the fog colour enters with this texel's coverage.
+    let lit = apply_fog_premultiplied(direct + ambient, alpha, world);
+    return vec4<f32>(lit * (a / alpha), a);
+}
+
+// Stochastic (screen-door) opacity for the shadow maps: a texel occludes with probability
+// equal to its plane opacity seen from the sun; the 3×3 PCF turns that into soft shadow.
+@vertex
+fn vs_impostor_shadow(in: ImpostorIn) -> ImpostorOut {
+    return impostor_vertex(in, frame.sun_dir.xyz, frame.view_proj, true);
+}
+
+@fragment
+fn fs_impostor_shadow(in: ImpostorOut) {
+    let t = fetch(in);
+    let a = plane_alpha(t.color.a, in.weight.x);
+    if (a <= hash13(vec3<f32>(in.pos.xy, f32(in.ids.y) * 7.0))) {
+        discard;
+    }
+}

@@ -1,0 +1,627 @@
+//! The GPU side of `boxtree`: atlas upload, per-frame traversal into instance lists, passes.
+
+use super::bake::{self as bt, BakedBox, BoxTreeBaked};
+use super::traverse::{self, LodView, Placement};
+use super::{BoxTreeParams, MAX_BOXES};
+use crate::RenderError;
+use crate::bake::codec::DecodeError;
+use crate::bake::views::PlaneFrame;
+use crate::frame::{CASCADES, FrameResources};
+use crate::instances::GpuTreeInstance;
+use crate::pipeline::{self, PassKind, PipelineSpec};
+use crate::technique::geometry::{LEAF_TRANSLUCENCY, MeshPipelines, SpeciesMeshes};
+use crate::technique::{DrawContext, DrawCounts, FrameInput, Representation};
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use std::ops::Range;
+use sylvan_gpu::{Gpu, layout};
+use sylvan_plant::{Mesh, Plant};
+use wgpu::util::DeviceExt;
+
+const PASSES: usize = 1 + CASCADES;
+const MAX_PLANES: usize = 6;
+/// Side of one atlas layer, at most (texels).
+const LAYER_SIZE: u32 = 2048;
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable, Default)]
+struct GpuPlane {
+    centre: [f32; 4],
+    u: [f32; 4],
+    v: [f32; 4],
+    f: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuBox {
+    planes: [GpuPlane; MAX_PLANES],
+    plant_min: [f32; 4],
+    plant_max: [f32; 4],
+    info: [u32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuAtlas {
+    tiles: [u32; 4],
+    params: [f32; 4],
+}
+
+/// One box drawn as images by one tree (vertex locations 4–6, per instance).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable, Debug, PartialEq)]
+struct GpuImpostor {
+    base_scale: [f32; 4],
+    /// cos, sin, tint seed, presence.
+    rot: [f32; 4],
+    box_index: u32,
+    _pad: [u32; 3],
+}
+
+impl GpuImpostor {
+    const LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+        array_stride: std::mem::size_of::<GpuImpostor>() as u64,
+        step_mode: wgpu::VertexStepMode::Instance,
+        attributes: &wgpu::vertex_attr_array![4 => Float32x4, 5 => Float32x4, 6 => Uint32],
+    };
+}
+
+struct Species {
+    meshes: SpeciesMeshes,
+    boxes: Vec<BakedBox>,
+    /// Index of this species' first box in the global box buffer.
+    box_base: u32,
+    bake_wood: bool,
+    /// Whole wood index range (drawn for every tree when wood is not baked).
+    wood_all: Range<u32>,
+}
+
+/// A buffer that grows (doubling) when a frame needs more, and never shrinks.
+struct Growable {
+    buffer: wgpu::Buffer,
+    label: &'static str,
+    reallocations: u32,
+}
+
+impl Growable {
+    fn new(gpu: &Gpu, label: &'static str, bytes: u64) -> Self {
+        Self {
+            buffer: Self::make(gpu, label, bytes.max(256)),
+            label,
+            reallocations: 0,
+        }
+    }
+    fn make(gpu: &Gpu, label: &str, size: u64) -> wgpu::Buffer {
+        gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size,
+            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    }
+    fn write(&mut self, gpu: &Gpu, data: &[u8]) -> Result<(), RenderError> {
+        let need = data.len() as u64;
+        if need > self.buffer.size() {
+            let limit = gpu.device.limits().max_buffer_size;
+            let size = need.next_power_of_two().min(limit);
+            if need > size {
+                return Err(RenderError::Gpu(sylvan_gpu::GpuError::Limit {
+                    what: format!("{} instance buffer", self.label),
+                    needed: need,
+                    limit,
+                    fix: "lower the LOD quality (texel size) or the tree count".into(),
+                }));
+            }
+            self.buffer = Self::make(gpu, self.label, size);
+            self.reallocations += 1;
+        }
+        if !data.is_empty() {
+            gpu.queue.write_buffer(&self.buffer, 0, data);
+        }
+        Ok(())
+    }
+}
+
+/// The prepared LCV04 technique.
+pub struct BoxTree {
+    params: BoxTreeParams,
+    species: Vec<Species>,
+    pipes: MeshPipelines,
+    impostor: wgpu::RenderPipeline,
+    impostor_shadow: wgpu::RenderPipeline,
+    bind: wgpu::BindGroup,
+    planes: u32,
+    static_bytes: u64,
+    // Per frame (reused; nothing is allocated once the vectors have grown).
+    impostors: Growable,
+    residual: Growable,
+    imp_staging: Vec<GpuImpostor>,
+    imp_sort: Vec<(f32, GpuImpostor)>,
+    res_lists: Vec<Vec<GpuTreeInstance>>,
+    res_staging: Vec<GpuTreeInstance>,
+    stack: Vec<(u32, f32)>,
+    imp_ranges: [Range<u32>; PASSES],
+    /// `res_ranges[pass][global box]`.
+    res_ranges: Vec<Vec<Range<u32>>>,
+}
+
+impl BoxTree {
+    /// Buffer re-allocations so far (they happen only when a frame needs more than any before).
+    pub fn reallocations(&self) -> u32 {
+        self.impostors.reallocations + self.residual.reallocations
+    }
+
+    /// Boxes per species.
+    pub fn box_counts(&self) -> Vec<usize> {
+        self.species.iter().map(|s| s.boxes.len()).collect()
+    }
+}
+
+fn reordered(mesh: &Mesh, indices: &[u32]) -> Mesh {
+    Mesh {
+        indices: indices.to_vec(),
+        ..mesh.clone()
+    }
+}
+
+impl Representation for BoxTree {
+    const NAME: &'static str = "boxtree";
+    const FORMAT_VERSION: u32 = bt::FORMAT_VERSION;
+    type Params = BoxTreeParams;
+    type Baked = BoxTreeBaked;
+
+    fn input_hash(plant: &Plant, params: &BoxTreeParams) -> u64 {
+        bt::input_hash(plant, params)
+    }
+
+    fn bake(
+        gpu: &Gpu,
+        plant: &Plant,
+        params: &BoxTreeParams,
+        progress: &mut dyn FnMut(usize, usize),
+    ) -> Result<BoxTreeBaked, RenderError> {
+        bt::bake(gpu, plant, params, progress)
+    }
+
+    fn encode(baked: &BoxTreeBaked) -> Vec<u8> {
+        baked.encode()
+    }
+
+    fn decode(bytes: &[u8]) -> Result<BoxTreeBaked, DecodeError> {
+        BoxTreeBaked::decode(bytes)
+    }
+
+    fn prepare(
+        gpu: &Gpu,
+        frame: &FrameResources,
+        plants: &[Plant],
+        baked: &[BoxTreeBaked],
+        params: &BoxTreeParams,
+    ) -> Result<Self, RenderError> {
+        params.validate()?;
+        if baked.len() != plants.len() {
+            return Err(RenderError::Plant(format!(
+                "{} baked box trees for {} plants",
+                baked.len(),
+                plants.len()
+            )));
+        }
+        let device = &gpu.device;
+        let tile = params.tile;
+        let layout = params.layout;
+        let images = layout.images();
+        let normals = layout.normals();
+        let mut species = Vec::with_capacity(plants.len());
+        let mut gpu_boxes: Vec<GpuBox> = Vec::new();
+        let mut tiles: Vec<&Vec<crate::bake::image::TileLevel>> = Vec::new();
+        let pipes = MeshPipelines::new(gpu, frame);
+        for (plant, b) in plants.iter().zip(baked) {
+            if b.tile != tile || b.layout != layout || b.boxes.len() as u32 > MAX_BOXES {
+                return Err(RenderError::Plant(format!(
+                    "{}: baked box tree does not match the parameters (tile {} vs {tile}, layout {} vs {}) — re-bake",
+                    plant.name,
+                    b.tile,
+                    b.layout.name(),
+                    layout.name()
+                )));
+            }
+            let box_base = gpu_boxes.len() as u32;
+            for (i, bx) in b.boxes.iter().enumerate() {
+                let mut planes = [GpuPlane::default(); MAX_PLANES];
+                for (p, &n) in planes.iter_mut().zip(&normals) {
+                    let f = PlaneFrame::for_box(n, Vec3::from(bx.min), Vec3::from(bx.max));
+                    *p = GpuPlane {
+                        centre: f.centre.extend(f.half.z).to_array(),
+                        u: f.u.extend(f.half.x).to_array(),
+                        v: f.v.extend(f.half.y).to_array(),
+                        f: f.f.extend(0.0).to_array(),
+                    };
+                }
+                gpu_boxes.push(GpuBox {
+                    planes,
+                    plant_min: Vec3::from(plant.bbox_min).extend(0.0).to_array(),
+                    plant_max: Vec3::from(plant.bbox_max).extend(0.0).to_array(),
+                    info: [
+                        tiles.len() as u32 + i as u32 * images,
+                        layout.sides(),
+                        normals.len() as u32,
+                        0,
+                    ],
+                });
+            }
+            tiles.extend(b.tiles.iter());
+            let leaves = reordered(&plant.leaves, &b.leaf_indices);
+            let wood = reordered(&plant.wood, &b.wood_indices);
+            species.push(Species {
+                meshes: SpeciesMeshes::new(gpu, &pipes, plant, &wood, &leaves)?,
+                boxes: b.boxes.clone(),
+                box_base,
+                bake_wood: b.bake_wood,
+                wood_all: 0..b.wood_indices.len() as u32,
+            });
+        }
+        // The atlas: tiles packed row-major into square layers, each tile with its own mips.
+        let limits = device.limits();
+        let layer = LAYER_SIZE.min(limits.max_texture_dimension_2d).max(tile);
+        let per_row = layer / tile;
+        let per_layer = per_row * per_row;
+        let layers = (tiles.len() as u32).div_ceil(per_layer).max(1);
+        if layers > limits.max_texture_array_layers {
+            return Err(RenderError::Gpu(sylvan_gpu::GpuError::Limit {
+                what: "boxtree atlas layers".into(),
+                needed: layers as u64,
+                limit: limits.max_texture_array_layers as u64,
+                fix: "use a smaller tile, a higher volume threshold or fewer boxes".into(),
+            }));
+        }
+        let mips = tile.ilog2() + 1;
+        let make = |label, format| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width: layer,
+                    height: layer,
+                    depth_or_array_layers: layers,
+                },
+                mip_level_count: mips,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                view_formats: &[],
+            })
+        };
+        let color = make("boxtree_atlas_color", wgpu::TextureFormat::Rgba8UnormSrgb);
+        let normal = make("boxtree_atlas_normal", wgpu::TextureFormat::Rgba8Unorm);
+        for (t, levels) in tiles.iter().enumerate() {
+            let t = t as u32;
+            let (l, cell) = (t / per_layer, t % per_layer);
+            let (cx, cy) = (cell % per_row, cell / per_row);
+            for (m, level) in levels.iter().enumerate().take(mips as usize) {
+                for (tex, data) in [(&color, &level.color), (&normal, &level.normal)] {
+                    gpu.queue.write_texture(
+                        wgpu::TexelCopyTextureInfo {
+                            texture: tex,
+                            mip_level: m as u32,
+                            origin: wgpu::Origin3d {
+                                x: cx * level.size,
+                                y: cy * level.size,
+                                z: l,
+                            },
+                            aspect: wgpu::TextureAspect::All,
+                        },
+                        data,
+                        wgpu::TexelCopyBufferLayout {
+                            offset: 0,
+                            bytes_per_row: Some(level.size * 4),
+                            rows_per_image: Some(level.size),
+                        },
+                        wgpu::Extent3d {
+                            width: level.size,
+                            height: level.size,
+                            depth_or_array_layers: 1,
+                        },
+                    );
+                }
+            }
+        }
+        let atlas_bytes: u64 = (0..mips)
+            .map(|m| ((layer >> m).max(1) as u64).pow(2) * 4 * 2 * layers as u64)
+            .sum();
+        let atlas = GpuAtlas {
+            tiles: [tile, per_row, per_layer, 0],
+            params: [LEAF_TRANSLUCENCY, 1.0 / per_row as f32, 0.0, 0.0],
+        };
+        let box_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("boxtree_boxes"),
+            contents: bytemuck::cast_slice(&gpu_boxes),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let atlas_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("boxtree_atlas"),
+            contents: bytemuck::bytes_of(&atlas),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("boxtree_sampler"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            mipmap_filter: wgpu::MipmapFilterMode::Linear,
+            // No anisotropy (see the geometry technique: ~1000× slower on lavapipe).
+            ..Default::default()
+        });
+        let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
+        let tex_entry = |b| {
+            layout::texture(
+                b,
+                wgpu::ShaderStages::FRAGMENT,
+                wgpu::TextureSampleType::Float { filterable: true },
+                wgpu::TextureViewDimension::D2Array,
+            )
+        };
+        let bind_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("boxtree_layout"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: vf,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { read_only: true },
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                tex_entry(1),
+                tex_entry(2),
+                layout::sampler(
+                    3,
+                    wgpu::ShaderStages::FRAGMENT,
+                    wgpu::SamplerBindingType::Filtering,
+                ),
+                layout::uniform(4, vf),
+            ],
+        });
+        let view = |t: &wgpu::Texture| {
+            t.create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::D2Array),
+                ..Default::default()
+            })
+        };
+        let (cv, nv) = (view(&color), view(&normal));
+        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("boxtree_bind"),
+            layout: &bind_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: box_buffer.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&cv),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::TextureView(&nv),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::Sampler(&sampler),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: atlas_buffer.as_entire_binding(),
+                },
+            ],
+        });
+        let module = sylvan_gpu::shader(
+            gpu,
+            "boxtree",
+            &pipeline::with_frame(include_str!("boxtree.wgsl")),
+        );
+        let buffers = [None, Some(GpuImpostor::LAYOUT)];
+        let premultiplied = wgpu::BlendState {
+            color: wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::One,
+                dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
+                operation: wgpu::BlendOperation::Add,
+            },
+            alpha: wgpu::BlendComponent::OVER,
+        };
+        let impostor = pipeline::build(
+            gpu,
+            &PipelineSpec {
+                label: "boxtree_impostor",
+                layouts: &[&frame.main_layout, &bind_layout],
+                module: &module,
+                vs: "vs_impostor",
+                fs: Some("fs_impostor"),
+                buffers: &buffers,
+                pass: PassKind::Main,
+                cull: None,
+                depth_write: false,
+                blend: Some(premultiplied),
+            },
+        );
+        let impostor_shadow = pipeline::build(
+            gpu,
+            &PipelineSpec {
+                label: "boxtree_impostor_shadow",
+                layouts: &[&frame.shadow_layout, &bind_layout],
+                module: &module,
+                vs: "vs_impostor_shadow",
+                fs: Some("fs_impostor_shadow"),
+                buffers: &buffers,
+                pass: PassKind::Shadow,
+                cull: None,
+                depth_write: true,
+                blend: None,
+            },
+        );
+        let total_boxes = gpu_boxes.len();
+        let static_bytes =
+            atlas_bytes + box_buffer.size() + species.iter().map(|s| s.meshes.bytes()).sum::<u64>();
+        Ok(Self {
+            params: params.clone(),
+            species,
+            pipes,
+            impostor,
+            impostor_shadow,
+            bind,
+            planes: normals.len() as u32,
+            static_bytes,
+            impostors: Growable::new(gpu, "boxtree_impostors", 1 << 16),
+            residual: Growable::new(gpu, "boxtree_residual", 1 << 16),
+            imp_staging: Vec::new(),
+            imp_sort: Vec::new(),
+            res_lists: vec![Vec::new(); total_boxes],
+            res_staging: Vec::new(),
+            stack: Vec::new(),
+            imp_ranges: std::array::from_fn(|_| 0..0),
+            res_ranges: vec![vec![0..0; total_boxes]; PASSES],
+        })
+    }
+
+    fn update(&mut self, gpu: &Gpu, input: &FrameInput<'_>) -> Result<(), RenderError> {
+        let view = LodView {
+            eye: input.eye,
+            pixels_per_metre: input.pixels_per_metre / self.params.texel_pixels,
+            band: self.params.band,
+        };
+        self.imp_staging.clear();
+        self.res_staging.clear();
+        for pass in 0..PASSES {
+            self.imp_sort.clear();
+            for list in &mut self.res_lists {
+                list.clear();
+            }
+            for (s, sp) in self.species.iter().enumerate() {
+                for rec in input.instances.records(pass, s) {
+                    let at = Placement {
+                        base: Vec3::new(rec.base_scale[0], rec.base_scale[1], rec.base_scale[2]),
+                        scale: rec.base_scale[3],
+                        cos: rec.rot[0],
+                        sin: rec.rot[1],
+                    };
+                    let (imp, res) = (&mut self.imp_sort, &mut self.res_lists);
+                    traverse::traverse(
+                        &sp.boxes,
+                        &at,
+                        &view,
+                        &mut self.stack,
+                        |b, w, d| {
+                            imp.push((
+                                d,
+                                GpuImpostor {
+                                    base_scale: rec.base_scale,
+                                    rot: [rec.rot[0], rec.rot[1], rec.rot[2], w],
+                                    box_index: sp.box_base + b,
+                                    _pad: [0; 3],
+                                },
+                            ))
+                        },
+                        |b, w| {
+                            let mut r = *rec;
+                            r.rot[3] = w;
+                            res[(sp.box_base + b) as usize].push(r);
+                        },
+                    );
+                }
+            }
+            if pass == 0 {
+                // Back to front: blending needs the far impostors first.
+                self.imp_sort.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
+            }
+            let start = self.imp_staging.len() as u32;
+            self.imp_staging.extend(self.imp_sort.iter().map(|x| x.1));
+            self.imp_ranges[pass] = start..self.imp_staging.len() as u32;
+            for (g, list) in self.res_lists.iter().enumerate() {
+                let start = self.res_staging.len() as u32;
+                self.res_staging.extend_from_slice(list);
+                self.res_ranges[pass][g] = start..self.res_staging.len() as u32;
+            }
+        }
+        self.impostors
+            .write(gpu, bytemuck::cast_slice(&self.imp_staging))?;
+        self.residual
+            .write(gpu, bytemuck::cast_slice(&self.res_staging))?;
+        Ok(())
+    }
+
+    fn draw(&self, pass: &mut wgpu::RenderPass<'_>, ctx: &DrawContext<'_>) -> DrawCounts {
+        self.record(pass, ctx, false)
+    }
+
+    fn draw_shadow(&self, pass: &mut wgpu::RenderPass<'_>, ctx: &DrawContext<'_>) -> DrawCounts {
+        self.record(pass, ctx, true)
+    }
+
+    fn bytes(&self) -> u64 {
+        self.static_bytes + self.impostors.buffer.size() + self.residual.buffer.size()
+    }
+}
+
+impl BoxTree {
+    fn record(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        ctx: &DrawContext<'_>,
+        shadow: bool,
+    ) -> DrawCounts {
+        let mut counts = DrawCounts::default();
+        let p = ctx.pass;
+        pass.set_bind_group(0, ctx.frame_bind, &[]);
+        // Opaque first: the geometry of opened boxes (or all wood, when wood is not baked).
+        let (wood, leaf) = self.pipes.for_pass(shadow);
+        for (pipeline, is_wood) in [(wood, true), (leaf, false)] {
+            pass.set_pipeline(pipeline);
+            for (s, sp) in self.species.iter().enumerate() {
+                let mesh = if is_wood {
+                    &sp.meshes.wood
+                } else {
+                    &sp.meshes.leaves
+                };
+                let Some(mesh) = mesh else { continue };
+                pass.set_bind_group(1, &sp.meshes.material, &[]);
+                if is_wood && !sp.bake_wood {
+                    counts += mesh.draw_range(
+                        pass,
+                        sp.wood_all.clone(),
+                        ctx.instances.buffer(),
+                        ctx.ranges[s].clone(),
+                    );
+                    continue;
+                }
+                for (b, bx) in sp.boxes.iter().enumerate() {
+                    let range = if is_wood {
+                        &bx.residual_wood
+                    } else {
+                        &bx.residual_leaves
+                    };
+                    let inst = self.res_ranges[p][(sp.box_base + b as u32) as usize].clone();
+                    counts += mesh.draw_range(pass, range.clone(), &self.residual.buffer, inst);
+                }
+            }
+        }
+        // Then every impostor of every species in one draw (sorted back to front).
+        let r = self.imp_ranges[p].clone();
+        if !r.is_empty() {
+            pass.set_pipeline(if shadow {
+                &self.impostor_shadow
+            } else {
+                &self.impostor
+            });
+            pass.set_bind_group(1, &self.bind, &[]);
+            pass.set_vertex_buffer(1, self.impostors.buffer.slice(..));
+            let n = r.end - r.start;
+            pass.draw(0..self.planes * 6, r);
+            counts += DrawCounts {
+                draw_calls: 1,
+                triangles: n as u64 * self.planes as u64 * 2,
+            };
+        }
+        counts
+    }
+}

@@ -1,0 +1,138 @@
+//! Technique `boxtree`: LCV04 — Lluch, Camahort, Vivó, *An Image-Based Multiresolution Model
+//! for Interactive Foliage Rendering*, WSCG 2004.
+//!
+//! Implements:
+//! - §3.1/§3.2.1 the bounding-box hierarchy (built by `sylvan-plant`'s turtle, one node per
+//!   branch);
+//! - §3.2.4 the volume-ratio threshold choosing which boxes get images ([`bake::select_boxes`]);
+//! - §3.2.2/§3.2.3 the images of each chosen box: orthographic, tightly framed, 64 or 128 px
+//!   ([`BoxTreeParams::tile`]), baked by the shared baker ([`crate::bake`]);
+//! - §4 (fig. 3) the axis-aligned cross and (fig. 6) the six diagonally aligned planes
+//!   ([`PlaneLayout`]);
+//! - §4.1 the per-tree, per-frame traversal: a box is drawn as images beyond its LOD distance
+//!   (where one texel covers one pixel), else opened; leaves nearest the viewer are real leaf
+//!   geometry (fig. 8) ([`traverse`]);
+//! - §4.2 alpha-blended transitions between levels over a distance band, and alpha blending of
+//!   the planes of a box.
+//!
+//! Deviations, each for a measured or stated reason:
+//! - **Lighting is not baked.** Images hold premultiplied albedo, coverage, normal and depth;
+//!   texels are lit at run time with the reference's model (sun × shadow map, sky × crown
+//!   occlusion, leaf translucency), so `boxtree` shades like `geometry` under any sun. LCV04
+//!   bakes shaded colour.
+//! - **Wood**: with `bake_wood` (default) a box's images include the wood inside it, and that
+//!   wood is drawn as geometry only once the box is opened — the wood's simplification by
+//!   distance. LCV04 always draws wood as geometry (`bake_wood = false` does that).
+//! - **Box choice** compares a box's volume with its nearest *textured* ancestor, not its
+//!   parent (see [`bake::select_boxes`]).
+//! - **Plane weighting**: the paper blends the planes as they are; here each plane's optical
+//!   depth is weighted by (view·normal)², normalised over the box's planes, so edge-on planes
+//!   vanish and a box seen along a baked direction is exact.
+//! - **Transitions** blend by optical depth (impostor) and by per-leaf presence (geometry)
+//!   rather than by a plain alpha cross-fade, which would dip in opacity mid-band.
+//! - Diagonal planes use one image per plane, seen mirrored from behind (normal reflected), so
+//!   both layouts store six images per box as in the paper.
+//!
+//! Cost: per frame, a CPU traversal of each culled tree's box tree per pass; impostors of all
+//! trees and species in one instanced draw per pass (sorted back to front in the main pass);
+//! residual geometry one instanced draw per (species, opened box) for wood and for leaves.
+//! Limits: at most [`MAX_BOXES`] boxes per plant; the atlas must fit the device's texture
+//! size and array-layer limits (checked before allocating).
+
+pub mod bake;
+mod draw;
+pub mod traverse;
+
+pub use crate::bake::views::PlaneLayout;
+pub use bake::BoxTreeBaked;
+pub use draw::BoxTree;
+
+use crate::RenderError;
+
+/// Most boxes (and so images × 6) per plant.
+pub const MAX_BOXES: u32 = 256;
+
+/// Bake and draw parameters of `boxtree`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BoxTreeParams {
+    /// Image size in texels (LCV04 §3.2.3: 64 or 128; any power of two 16–512 accepted).
+    pub tile: u32,
+    /// Volume-ratio threshold (LCV04 §3.2.4).
+    pub volume_threshold: f32,
+    /// Fewest leaves a box needs to get images.
+    pub min_leaves: u32,
+    /// Most boxes per plant.
+    pub max_boxes: u32,
+    /// Plane arrangement.
+    pub layout: PlaneLayout,
+    /// Include the wood inside a box in its images (see the module docs).
+    pub bake_wood: bool,
+    /// Supersampling per axis when baking (coverage precision).
+    pub supersample: u32,
+    /// A box opens when one of its texels would cover more than this many pixels.
+    pub texel_pixels: f32,
+    /// Width of the transition band, relative to the LOD distance.
+    pub band: f32,
+}
+
+impl Default for BoxTreeParams {
+    fn default() -> Self {
+        Self {
+            tile: 64,
+            volume_threshold: 0.005,
+            min_leaves: 32,
+            max_boxes: 64,
+            layout: PlaneLayout::Diagonal,
+            bake_wood: true,
+            supersample: 4,
+            texel_pixels: 1.0,
+            band: 0.3,
+        }
+    }
+}
+
+impl BoxTreeParams {
+    /// Checks every value; the error names the option and the valid range.
+    pub fn validate(&self) -> Result<(), RenderError> {
+        let bad = |m: String| Err(RenderError::Option(m));
+        if !self.tile.is_power_of_two() || !(16..=512).contains(&self.tile) {
+            return bad(format!(
+                "boxtree tile {}: must be a power of two from 16 to 512 — LCV04 uses 64 or 128",
+                self.tile
+            ));
+        }
+        if !(self.volume_threshold.is_finite() && (0.0..=1.0).contains(&self.volume_threshold)) {
+            return bad(format!(
+                "boxtree volume threshold {}: must be between 0 and 1",
+                self.volume_threshold
+            ));
+        }
+        if !(1..=MAX_BOXES).contains(&self.max_boxes) {
+            return bad(format!(
+                "boxtree max boxes {}: must be 1 to {MAX_BOXES}",
+                self.max_boxes
+            ));
+        }
+        if !(1..=crate::bake::MAX_SUPERSAMPLE).contains(&self.supersample) {
+            return bad(format!(
+                "boxtree supersampling {}: must be 1 to {}",
+                self.supersample,
+                crate::bake::MAX_SUPERSAMPLE
+            ));
+        }
+        if !(self.texel_pixels.is_finite() && self.texel_pixels > 0.05 && self.texel_pixels <= 64.0)
+        {
+            return bad(format!(
+                "boxtree texel size {} px: must be between 0.05 and 64",
+                self.texel_pixels
+            ));
+        }
+        if !(self.band.is_finite() && (0.0..=4.0).contains(&self.band)) {
+            return bad(format!(
+                "boxtree transition band {}: must be 0 to 4",
+                self.band
+            ));
+        }
+        Ok(())
+    }
+}
