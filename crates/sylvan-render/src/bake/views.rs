@@ -70,6 +70,9 @@ pub enum PlaneLayout {
     /// Fig. 6: six diagonally aligned planes, each containing one box axis and a diagonal of
     /// the faces across it; one image per plane, seen mirrored from behind (6 images).
     Diagonal,
+    /// Not LCV04: the naive baseline — one image baked from +Z, drawn on a quad that turns
+    /// about the vertical axis to face the viewer (a classic billboard).
+    Billboard,
 }
 
 impl PlaneLayout {
@@ -92,14 +95,36 @@ impl PlaneLayout {
                 Vec3::new(0.0, s, s),
                 Vec3::new(0.0, s, -s),
             ],
+            PlaneLayout::Billboard => vec![Vec3::Z],
         }
+    }
+
+    /// The planes of the box `min..max`, as baked and drawn. A billboard frames the box's
+    /// circumscribed vertical cylinder, so the quad covers the box from any azimuth.
+    pub fn frames(self, min: Vec3, max: Vec3) -> Vec<PlaneFrame> {
+        let (min, max) = match self {
+            PlaneLayout::Billboard => {
+                let c = (min + max) * 0.5;
+                let h = (max - min) * 0.5;
+                let r = h.x.hypot(h.z);
+                (
+                    Vec3::new(c.x - r, min.y, c.z - r),
+                    Vec3::new(c.x + r, max.y, c.z + r),
+                )
+            }
+            _ => (min, max),
+        };
+        self.normals()
+            .into_iter()
+            .map(|n| PlaneFrame::for_box(n, min, max))
+            .collect()
     }
 
     /// Images baked per plane: 2 (front and back) for the axis cross, 1 for diagonal planes.
     pub fn sides(self) -> u32 {
         match self {
             PlaneLayout::Axis => 2,
-            PlaneLayout::Diagonal => 1,
+            PlaneLayout::Diagonal | PlaneLayout::Billboard => 1,
         }
     }
 
@@ -113,6 +138,7 @@ impl PlaneLayout {
         match self {
             PlaneLayout::Axis => "axis",
             PlaneLayout::Diagonal => "diagonal",
+            PlaneLayout::Billboard => "billboard",
         }
     }
 
@@ -129,9 +155,12 @@ mod tests {
     #[test]
     fn projection_maps_box_to_unit_cube() {
         let (min, max) = (Vec3::new(-1.0, 0.0, -2.0), Vec3::new(3.0, 5.0, 1.0));
-        for layout in [PlaneLayout::Axis, PlaneLayout::Diagonal] {
-            for n in layout.normals() {
-                let p = PlaneFrame::for_box(n, min, max);
+        for layout in [
+            PlaneLayout::Axis,
+            PlaneLayout::Diagonal,
+            PlaneLayout::Billboard,
+        ] {
+            for p in layout.frames(min, max) {
                 for side in [1.0f32, -1.0] {
                     let m = p.view_proj(side);
                     for i in 0..8 {

@@ -6,7 +6,7 @@ use super::BoxTreeParams;
 use crate::RenderError;
 use crate::bake::codec::{DecodeError, Decoder, Encoder, Fnv64};
 use crate::bake::image::TileLevel;
-use crate::bake::views::{PlaneFrame, PlaneLayout};
+use crate::bake::views::PlaneLayout;
 use crate::bake::{BakeRequest, PlantBaker};
 use glam::Vec3;
 use std::ops::Range;
@@ -457,7 +457,6 @@ pub fn layout(plant: &Plant, p: &BoxTreeParams) -> Layout {
         boxes[b].residual_wood = start..wood_indices.len() as u32;
         stack.extend(boxes[b].children.iter().rev().map(|&c| c as usize));
     }
-    let normals = p.layout.normals();
     let mut requests = Vec::new();
     for (b, s) in boxes.iter_mut().zip(&selected) {
         let (min, max) = (Vec3::from(b.min), Vec3::from(b.max));
@@ -468,8 +467,7 @@ pub fn layout(plant: &Plant, p: &BoxTreeParams) -> Layout {
             (l, w)
         };
         let mut largest = 0.0f32;
-        for &n in &normals {
-            let frame = PlaneFrame::for_box(n, min, max);
+        for frame in p.layout.frames(min, max) {
             largest = largest.max(frame.half.x.max(frame.half.y) * 2.0);
             for side in [1.0, -1.0].into_iter().take(p.layout.sides() as usize) {
                 requests.push(BakeRequest {

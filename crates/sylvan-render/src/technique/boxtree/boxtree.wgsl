@@ -20,7 +20,8 @@ struct Box {
     // The plant's bounding box (for the crown occlusion term, as in the geometry).
     plant_min: vec4<f32>,
     plant_max: vec4<f32>,
-    // x: first tile; y: images per plane (1 or 2); z: planes.
+    // x: first tile; y: images per plane (1 or 2); z: planes; w: 1 for a billboard (one plane
+    // turned about the vertical axis towards the viewer).
     info: vec4<u32>,
 };
 
@@ -58,6 +59,8 @@ struct ImpostorOut {
     @location(4) @interpolate(flat) weight: vec4<f32>,
     // The tree's uniform scale.
     @location(5) @interpolate(flat) scale: f32,
+    // The plane normal as drawn (model space; turned towards the viewer for a billboard).
+    @location(6) @interpolate(flat) axis: vec3<f32>,
 };
 
 fn to_world(p: vec3<f32>, base_scale: vec4<f32>, rot: vec4<f32>) -> vec3<f32> {
@@ -87,19 +90,34 @@ fn impostor_vertex(in: ImpostorIn, toward_world: vec3<f32>, view_proj: mat4x4<f3
         out.pos = vec4<f32>(0.0, 0.0, -2.0, 1.0);
         return out;
     }
-    let p = b.planes[plane];
+    var p = b.planes[plane];
     var toward = toward_world;
     if (!is_dir) {
         toward = toward_world - to_world(b.planes[0].centre.xyz, in.base_scale, in.rot);
     }
     let d = normalize(to_model_dir(toward, in.rot));
-    var total = 0.0;
-    for (var i = 0u; i < b.info.z; i = i + 1u) {
-        let c = dot(d, b.planes[i].f.xyz);
-        total = total + c * c;
+    var w = 1.0;
+    var c = 1.0;
+    if (b.info.w == 1u) {
+        // Billboard: turn the plane about Y to face the viewer.
+        let h = vec2<f32>(d.x, d.z);
+        let f = select(vec3<f32>(0.0, 0.0, 1.0), normalize(vec3<f32>(h.x, 0.0, h.y)), dot(h, h) > 1e-8);
+        p.f = vec4<f32>(f, 0.0);
+        p.u = vec4<f32>(cross(p.v.xyz, f), p.u.w);
+    } else {
+        var total = 0.0;
+        for (var i = 0u; i < b.info.z; i = i + 1u) {
+            let ci = dot(d, b.planes[i].f.xyz);
+            total = total + ci * ci;
+        }
+        c = dot(d, p.f.xyz);
+        w = c * c / max(total, 1e-6);
     }
-    let c = dot(d, p.f.xyz);
-    let w = c * c / max(total, 1e-6);
+    // A plane seen (almost) edge-on contributes nothing: skip its fragments entirely.
+    if (w * in.rot.w < 0.01) {
+        out.pos = vec4<f32>(0.0, 0.0, -2.0, 1.0);
+        return out;
+    }
     let st = array<vec2<f32>, 6>(
         vec2<f32>(0.0, 1.0), vec2<f32>(1.0, 1.0), vec2<f32>(1.0, 0.0),
         vec2<f32>(0.0, 1.0), vec2<f32>(1.0, 0.0), vec2<f32>(0.0, 0.0),
@@ -113,6 +131,7 @@ fn impostor_vertex(in: ImpostorIn, toward_world: vec3<f32>, view_proj: mat4x4<f3
     out.ids = vec3<u32>(in.box_index, plane, select(0u, 1u, c >= 0.0));
     out.weight = vec4<f32>(w * in.rot.w, in.rot.z, in.rot.x, in.rot.y);
     out.scale = in.base_scale.w;
+    out.axis = p.f.xyz;
     return out;
 }
 
@@ -174,13 +193,18 @@ fn fs_impostor(in: ImpostorOut) -> @location(0) vec4<f32> {
     let b = boxes[in.ids.x];
     let p = b.planes[in.ids.y];
     var n = normalize(t.normal_depth.xyz * 2.0 - 1.0);
+    let f = in.axis;
+    if (b.info.w == 1u) {
+        // Billboard: the image was baked from +Z; turn its normals with the quad.
+        n = vec3<f32>(n.x * f.z + n.z * f.x, n.y, -n.x * f.x + n.z * f.z);
+    }
     if (t.image == 2u) {
         // Mirrored use of the front image: reflect the normal through the plane.
-        n = n - 2.0 * dot(n, p.f.xyz) * p.f.xyz;
+        n = n - 2.0 * dot(n, f) * f;
     }
     // Where the texel's surface is: on the plane, moved along f by its baked depth.
     let side = select(-1.0, 1.0, t.image != 0u);
-    let model = in.model + p.f.xyz * side * p.centre.w * (1.0 - 2.0 * t.normal_depth.w);
+    let model = in.model + f * side * p.centre.w * (1.0 - 2.0 * t.normal_depth.w);
     let rot = vec4<f32>(in.weight.z, in.weight.w, 0.0, 0.0);
     let world = in.world + to_world_dir(model - in.model, rot) * in.scale;
     let nw = normalize(to_world_dir(n, rot));

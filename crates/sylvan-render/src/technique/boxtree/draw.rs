@@ -5,7 +5,7 @@ use super::traverse::{self, LodView, Placement};
 use super::{BoxTreeParams, MAX_BOXES};
 use crate::RenderError;
 use crate::bake::codec::DecodeError;
-use crate::bake::views::PlaneFrame;
+use crate::bake::views::PlaneLayout;
 use crate::frame::{CASCADES, FrameResources};
 use crate::instances::GpuTreeInstance;
 use crate::pipeline::{self, PassKind, PipelineSpec};
@@ -211,7 +211,7 @@ impl Representation for BoxTree {
         let tile = params.tile;
         let layout = params.layout;
         let images = layout.images();
-        let normals = layout.normals();
+        let planes_per_box = layout.normals().len() as u32;
         let mut species = Vec::with_capacity(plants.len());
         let mut gpu_boxes: Vec<GpuBox> = Vec::new();
         let mut tiles: Vec<&Vec<crate::bake::image::TileLevel>> = Vec::new();
@@ -229,8 +229,8 @@ impl Representation for BoxTree {
             let box_base = gpu_boxes.len() as u32;
             for (i, bx) in b.boxes.iter().enumerate() {
                 let mut planes = [GpuPlane::default(); MAX_PLANES];
-                for (p, &n) in planes.iter_mut().zip(&normals) {
-                    let f = PlaneFrame::for_box(n, Vec3::from(bx.min), Vec3::from(bx.max));
+                let frames = layout.frames(Vec3::from(bx.min), Vec3::from(bx.max));
+                for (p, f) in planes.iter_mut().zip(frames) {
                     *p = GpuPlane {
                         centre: f.centre.extend(f.half.z).to_array(),
                         u: f.u.extend(f.half.x).to_array(),
@@ -245,8 +245,8 @@ impl Representation for BoxTree {
                     info: [
                         tiles.len() as u32 + i as u32 * images,
                         layout.sides(),
-                        normals.len() as u32,
-                        0,
+                        planes_per_box,
+                        (layout == PlaneLayout::Billboard) as u32,
                     ],
                 });
             }
@@ -263,8 +263,13 @@ impl Representation for BoxTree {
         }
         // The atlas: tiles packed row-major into square layers, each tile with its own mips.
         let limits = device.limits();
-        let layer = LAYER_SIZE.min(limits.max_texture_dimension_2d).max(tile);
-        let per_row = layer / tile;
+        let max_row = (LAYER_SIZE.min(limits.max_texture_dimension_2d) / tile).max(1);
+        // The smallest power-of-two square that holds every tile, else full layers.
+        let per_row = ((tiles.len() as f64).sqrt().ceil() as u32)
+            .max(1)
+            .next_power_of_two()
+            .min(max_row);
+        let layer = per_row * tile;
         let per_layer = per_row * per_row;
         let layers = (tiles.len() as u32).div_ceil(per_layer).max(1);
         if layers > limits.max_texture_array_layers {
@@ -470,7 +475,7 @@ impl Representation for BoxTree {
             impostor,
             impostor_shadow,
             bind,
-            planes: normals.len() as u32,
+            planes: planes_per_box,
             static_bytes,
             impostors: Growable::new(gpu, "boxtree_impostors", 1 << 16),
             residual: Growable::new(gpu, "boxtree_residual", 1 << 16),
