@@ -5,13 +5,16 @@
 //! `libegl1 libegl-mesa0 libgl1-mesa-dri`) with apt-get, saying so, and then run.
 //!
 //! - `demo`: renders the built-in forest to `out/demo.png` and prints frame stats.
-//! - `test`: `cargo fmt --check`, `cargo clippy -D warnings`, then the whole test suite.
+//! - `test`: `cargo fmt --check`, `cargo clippy -D warnings`, then the whole test suite. The
+//!   viewer's tests (`crates/sylvan/tests/view_cli.rs`) open windows on their own `Xvfb`: when
+//!   `Xvfb` is missing, `test` installs `xvfb` with apt-get first.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
 
 const VULKAN_PACKAGES: &[&str] = &["mesa-vulkan-drivers", "libvulkan1"];
 const GL_PACKAGES: &[&str] = &["libegl1", "libegl-mesa0", "libgl1-mesa-dri"];
+const XVFB_PACKAGES: &[&str] = &["xvfb"];
 
 fn main() -> ExitCode {
     let task = std::env::args().nth(1).unwrap_or_default();
@@ -77,7 +80,11 @@ fn build_cli(release: bool) -> Result<PathBuf, String> {
     }
     let profile = if release { "release" } else { "debug" };
     run(c, &format!("building sylvan ({profile})"))?;
-    Ok(root().join("target").join(profile).join("sylvan"))
+    let target = std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .map(|t| if t.is_absolute() { t } else { root().join(t) })
+        .unwrap_or_else(|| root().join("target"));
+    Ok(target.join(profile).join("sylvan"))
 }
 
 /// Whether `sylvan adapter` finds a GPU adapter; prints its line.
@@ -135,6 +142,39 @@ fn ensure_adapter(cli: &Path) -> Result<(), String> {
     }
 }
 
+/// Makes sure `Xvfb` exists for the viewer tests, installing `xvfb` with apt-get when not.
+fn ensure_xvfb() -> Result<(), String> {
+    let found = || {
+        Command::new("Xvfb")
+            .arg("-help")
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .status()
+            .is_ok()
+    };
+    if found() {
+        return Ok(());
+    }
+    eprintln!(
+        "xtask: Xvfb not found — installing the virtual X server for the viewer tests with apt-get: {}",
+        XVFB_PACKAGES.join(" ")
+    );
+    let mut install = vec!["install", "-y", "--no-install-recommends"];
+    install.extend(XVFB_PACKAGES);
+    if apt_get(&install).is_err() {
+        apt_get(&["update"])?;
+        apt_get(&install)?;
+    }
+    if found() {
+        Ok(())
+    } else {
+        Err(
+            "still no Xvfb after installing xvfb — the viewer tests need it (`Xvfb :99` must run)"
+                .into(),
+        )
+    }
+}
+
 fn demo() -> Result<(), String> {
     let cli = build_cli(true)?;
     ensure_adapter(&cli)?;
@@ -177,6 +217,7 @@ fn test() -> Result<(), String> {
     )?;
     let cli = build_cli(false)?;
     ensure_adapter(&cli)?;
+    ensure_xvfb()?;
     let mut tests = cargo();
     tests.args(["test", "--workspace"]);
     run(tests, "cargo test --workspace")

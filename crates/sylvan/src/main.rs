@@ -29,6 +29,8 @@ enum Command {
     Bench(cmd::bench::BenchArgs),
     /// Compare two images: FLIP, SSIM, PSNR.
     Compare(cmd::compare::CompareArgs),
+    /// Open the interactive viewer (or, with --frames N, run N frames and exit).
+    View(cmd::view::ViewerArgs),
     /// Print the GPU adapter Sylvan would use; fails with an install hint when there is none.
     Adapter,
 }
@@ -49,6 +51,7 @@ fn main() -> ExitCode {
         Command::Render(args) => cmd::render::run(args),
         Command::Bench(args) => cmd::bench::run(args),
         Command::Compare(args) => cmd::compare::run(args),
+        Command::View(args) => cmd::view::run(args),
         Command::Adapter => sylvan_gpu::Gpu::new().map_err(Into::into).map(|gpu| {
             let ts = if gpu.timestamps {
                 "GPU timestamps"

@@ -65,13 +65,19 @@ pub struct BakeArgs {
     /// Bake every time; read and write no cache files.
     #[arg(long)]
     pub no_cache: bool,
+    /// boxtree: most boxes per plant that get images.
+    #[arg(long, default_value_t = BoxTreeParams::default().max_boxes)]
+    pub max_boxes: u32,
 }
 
 impl BakeArgs {
     /// The validated boxtree parameters.
     pub fn boxtree(&self) -> Result<BoxTreeParams> {
         let layout = PlaneLayout::parse(&self.planes).ok_or_else(|| {
-            anyhow::anyhow!("--planes {}: expected `diagonal` or `axis`", self.planes)
+            anyhow::anyhow!(
+                "--planes {}: expected `diagonal`, `axis` or `billboard` (the naive baseline)",
+                self.planes
+            )
         })?;
         let p = BoxTreeParams {
             tile: self.tile,
@@ -80,6 +86,7 @@ impl BakeArgs {
             bake_wood: !self.wood_geometry,
             texel_pixels: self.texel_pixels,
             band: self.band,
+            max_boxes: self.max_boxes,
             ..Default::default()
         };
         p.validate()?;

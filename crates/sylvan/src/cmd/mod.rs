@@ -7,3 +7,4 @@ pub mod compare;
 pub mod plant;
 pub mod render;
 pub mod stats;
+pub mod view;

@@ -1,9 +1,10 @@
-//! `sylvan render`: one frame to a PNG, optionally with stats JSON.
+//! `sylvan render`: one frame to a PNG, optionally with stats JSON; with `--path FILE --frames
+//! N`, N frames along a camera path to numbered PNGs (for transition studies and videos).
 
-use super::common::{ViewArgs, prepare};
+use super::common::{ViewArgs, load_path, path_time, prepare};
 use super::stats::Report;
-use anyhow::{Context, Result};
-use std::path::PathBuf;
+use anyhow::{Context, Result, bail};
+use std::path::{Path, PathBuf};
 
 /// Flags of `sylvan render`.
 #[derive(clap::Args, Debug)]
@@ -16,23 +17,73 @@ pub struct RenderArgs {
     /// Write frame stats (same fields as `bench --json`) to this JSON file.
     #[arg(long)]
     pub stats: Option<PathBuf>,
+    /// Follow a camera path (TOML, as `sylvan view` records it and `bench --path` replays).
+    #[arg(long, value_name = "FILE.toml")]
+    pub path: Option<PathBuf>,
+    /// With --path: frames to render, evenly spaced in path time; `--out a.png` becomes
+    /// `a-000.png`, `a-001.png`, ….
+    #[arg(long, default_value_t = 1)]
+    pub frames: usize,
+}
+
+/// Most frames `render --path` writes.
+pub const MAX_FRAMES: usize = 10_000;
+
+fn numbered(out: &Path, i: usize) -> PathBuf {
+    let stem = out
+        .file_stem()
+        .map_or("frame".into(), |s| s.to_string_lossy().into_owned());
+    out.with_file_name(format!("{stem}-{i:03}.png"))
+}
+
+fn save(image: image::RgbaImage, out: &Path) -> Result<()> {
+    image::DynamicImage::ImageRgba8(image)
+        .into_rgb8()
+        .save(out)
+        .with_context(|| {
+            format!(
+                "{}: cannot write PNG — check the folder exists and is writable",
+                out.display()
+            )
+        })
 }
 
 /// Runs `sylvan render`.
 pub fn run(args: RenderArgs) -> Result<()> {
+    if args.frames == 0 || args.frames > MAX_FRAMES {
+        bail!(
+            "--frames {}: must be between 1 and {MAX_FRAMES}",
+            args.frames
+        );
+    }
+    if args.frames > 1 && args.path.is_none() {
+        bail!(
+            "--frames {}: several frames need a camera path — add --path FILE.toml",
+            args.frames
+        );
+    }
+    let camera_path = match &args.path {
+        Some(p) => Some(load_path(p, args.view.camera.as_deref())?),
+        None => None,
+    };
     let r = args.view.resolve()?;
     let (gpu, mut renderer, bake_ms) = prepare(&r)?;
-    let stats = renderer.render(&gpu, &r.camera, &r.sun)?;
-    let image = renderer.read_image(&gpu)?;
-    image::DynamicImage::ImageRgba8(image)
-        .into_rgb8()
-        .save(&args.out)
-        .with_context(|| {
-            format!(
-                "{}: cannot write PNG — check the folder exists and is writable",
-                args.out.display()
-            )
-        })?;
+    let mut stats = None;
+    for i in 0..args.frames {
+        let camera = match &camera_path {
+            Some(p) => p.sample(path_time(i, args.frames, p.duration())),
+            None => r.camera,
+        };
+        let s = renderer.render(&gpu, &camera, &r.sun)?;
+        let out = if camera_path.is_some() {
+            numbered(&args.out, i)
+        } else {
+            args.out.clone()
+        };
+        save(renderer.read_image(&gpu)?, &out)?;
+        stats = Some(s);
+    }
+    let stats = stats.expect("at least one frame");
     let report = Report::new(
         r.options.technique.name(),
         [r.options.width, r.options.height],

@@ -218,7 +218,9 @@ fn fs_impostor(in: ImpostorOut) -> @location(0) vec4<f32> {
     let direct = frame.sun_color.rgb * (albedo * max(ndl, 0.0) + transmitted) * vis;
     let ambient = albedo * sky_light(nw) * crown_occlusion(model, b.plant_min.xyz, b.plant_max.xyz);
     // Fog on premultiplied colour: the fog colour enters with this texel's coverage.
-    let lit = apply_fog_premultiplied(direct + ambient, alpha, world);
+    let fogged = apply_fog_premultiplied(direct + ambient, alpha, world);
+    // Debug view "technique": impostors in the boxtree colour (opened geometry stays geometry's).
+    let lit = debug_tint(fogged / alpha, world, 1) * alpha;
     return vec4<f32>(lit * (a / alpha), a);
 }
 
