@@ -466,7 +466,7 @@ impl Renderer {
                 1.0 / self.frame.shadow_resolution as f32,
                 0.0,
                 self.options.debug.code(),
-                0.0,
+                self.targets.output.height as f32 / (2.0 * (view.fov_y * 0.5).tan()),
             ],
         }
     }

@@ -77,9 +77,10 @@ pub enum PlaneLayout {
 
 impl PlaneLayout {
     /// Both layouts, for parsing and tests.
-    pub const ALL: [(&'static str, PlaneLayout); 2] = [
+    pub const ALL: [(&'static str, PlaneLayout); 3] = [
         ("axis", PlaneLayout::Axis),
         ("diagonal", PlaneLayout::Diagonal),
+        ("billboard", PlaneLayout::Billboard),
     ];
 
     /// The plane normals.

@@ -18,7 +18,8 @@ struct Frame {
     sky_ground: vec4<f32>,
     // Far distance (view depth, metres) of each cascade.
     cascade_far: vec4<f32>,
-    // x: shadow map texel size (1/resolution); y: time; z: debug view (`DebugView`); w: unused.
+    // x: shadow map texel size (1/resolution); y: time; z: debug view (`DebugView`); w: pixels
+    // covered by one metre at one metre in the output image (height / (2 tan(fov_y / 2))).
     shadow_params: vec4<f32>,
 };
 

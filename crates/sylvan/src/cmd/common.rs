@@ -44,8 +44,9 @@ pub struct BakeArgs {
     /// boxtree: image size per box face in texels (LCV04 uses 64 or 128).
     #[arg(long, default_value_t = BoxTreeParams::default().tile)]
     pub tile: u32,
-    /// boxtree: plane arrangement, `diagonal` (LCV04 fig. 6) or `axis` (fig. 3).
-    #[arg(long, default_value = "diagonal")]
+    /// boxtree: plane arrangement, `axis` (LCV04 fig. 3; measures better, see BENCHMARKS.md),
+    /// `diagonal` (fig. 6) or `billboard` (the naive one-image baseline).
+    #[arg(long, default_value = "axis")]
     pub planes: String,
     /// boxtree: volume-ratio threshold for boxes to get images (LCV04 §3.2.4).
     #[arg(long, default_value_t = BoxTreeParams::default().volume_threshold)]
@@ -68,6 +69,9 @@ pub struct BakeArgs {
     /// boxtree: most boxes per plant that get images.
     #[arg(long, default_value_t = BoxTreeParams::default().max_boxes)]
     pub max_boxes: u32,
+    /// boxtree: fewest leaves a box needs to get images.
+    #[arg(long, default_value_t = BoxTreeParams::default().min_leaves)]
+    pub min_leaves: u32,
 }
 
 impl BakeArgs {
@@ -87,6 +91,7 @@ impl BakeArgs {
             texel_pixels: self.texel_pixels,
             band: self.band,
             max_boxes: self.max_boxes,
+            min_leaves: self.min_leaves,
             ..Default::default()
         };
         p.validate()?;

@@ -21,12 +21,50 @@ pub struct CompareArgs {
     /// Also write the FLIP error heat-map (magma colours, black = no error) to this PNG.
     #[arg(long, value_name = "FILE.png")]
     heatmap: Option<PathBuf>,
+    /// Compare only this rectangle of both images: X,Y,WIDTH,HEIGHT in pixels (clipped to the
+    /// image), e.g. the region around one tree.
+    #[arg(long, value_name = "X,Y,W,H")]
+    crop: Option<String>,
+}
+
+/// Parses `X,Y,W,H` and clips it to a `width`×`height` image.
+fn parse_crop(s: &str, width: u32, height: u32) -> anyhow::Result<[u32; 4]> {
+    let bad = || {
+        anyhow::anyhow!(
+            "--crop {s}: expected X,Y,WIDTH,HEIGHT in pixels, e.g. --crop 100,50,200,300"
+        )
+    };
+    let v: Vec<u32> = s
+        .split(',')
+        .map(|p| p.trim().parse::<u32>().map_err(|_| bad()))
+        .collect::<Result<_, _>>()?;
+    let [x, y, w, h] = <[u32; 4]>::try_from(v).map_err(|_| bad())?;
+    if x >= width || y >= height || w == 0 || h == 0 {
+        anyhow::bail!("--crop {s}: the rectangle is outside the {width}x{height} image or empty");
+    }
+    Ok([x, y, w.min(width - x), h.min(height - y)])
 }
 
 /// Runs `sylvan compare`.
 pub fn run(args: CompareArgs) -> anyhow::Result<()> {
-    let a = sylvan_eval::load_rgb(&args.a)?;
-    let b = sylvan_eval::load_rgb(&args.b)?;
+    let mut a = sylvan_eval::load_rgb(&args.a)?;
+    let mut b = sylvan_eval::load_rgb(&args.b)?;
+    if let Some(c) = &args.crop {
+        let [x, y, w, h] = parse_crop(c, a.width(), a.height())?;
+        if b.dimensions() != a.dimensions() {
+            anyhow::bail!(
+                "{} vs {}: the images differ in size ({}x{} vs {}x{}) — compare renders of the same --size",
+                args.a.display(),
+                args.b.display(),
+                a.width(),
+                a.height(),
+                b.width(),
+                b.height()
+            );
+        }
+        a = image::imageops::crop_imm(&a, x, y, w, h).to_image();
+        b = image::imageops::crop_imm(&b, x, y, w, h).to_image();
+    }
     let (metrics, flip) = sylvan_eval::compare_detailed(&a, &b).map_err(|e| match e {
         // The library knows the sizes, not the files: name them.
         EvalError::SizeMismatch { .. } | EvalError::TooSmall { .. } => {

@@ -285,7 +285,10 @@ pub const MAX_VOLUME_RATIO: f32 = 0.5;
 
 /// LCV04 §3.2.4: the root box always gets images; another node's box gets images when its
 /// volume is at least `threshold` × the volume of the nearest box above it that has images,
-/// and it holds at least `min_leaves` leaves. At most `max_boxes` boxes, in hierarchy order.
+/// and it holds at least `min_leaves` leaves. Nodes are considered largest box first, so when
+/// `max_boxes` cuts the list it keeps the boxes that matter most (a box is never smaller than
+/// a box inside it, so parents are still decided before their children). The result is in
+/// hierarchy order, parents before children.
 ///
 /// Deviations: the paper compares with the node's *parent* box; comparing with the nearest
 /// *textured* ancestor stops chains of small nested twigs from each getting images. Boxes above
@@ -309,38 +312,52 @@ pub fn select_boxes(
         .map(|i| plant.bbox_max[i] - plant.bbox_min[i])
         .fold(0.0f32, f32::max);
     let floor = (ext * 0.05).max(1e-3);
-    let mut textured: Vec<Option<u32>> = vec![None; nodes.len()];
-    let mut out = vec![Selected {
-        node: 0,
-        parent: u32::MAX,
-    }];
-    textured[0] = Some(0);
-    for (i, n) in nodes.iter().enumerate().skip(1) {
-        // Nearest textured ancestor (parents come before children).
+    let vol: Vec<f32> = nodes
+        .iter()
+        .map(|n| volume(n.bbox_min, n.bbox_max, floor))
+        .collect();
+    let mut order: Vec<usize> = (1..nodes.len()).collect();
+    // Largest first; ties in hierarchy order (parents first).
+    order.sort_by(|&a, &b| vol[b].total_cmp(&vol[a]).then(a.cmp(&b)));
+    let mut textured = vec![false; nodes.len()];
+    textured[0] = true;
+    let mut count = 1;
+    for i in order {
+        if count >= max_boxes as usize {
+            break;
+        }
+        let n = &nodes[i];
         let mut a = n.parent;
         let anc = loop {
             match a {
-                Some(p) => match textured[p as usize] {
-                    Some(t) => break t,
-                    None => a = nodes[p as usize].parent,
-                },
+                Some(p) if textured[p as usize] => break p as usize,
+                Some(p) => a = nodes[p as usize].parent,
                 None => break 0,
             }
         };
-        let anc_node = &nodes[out[anc as usize].node as usize];
-        let ratio = volume(n.bbox_min, n.bbox_max, floor)
-            / volume(anc_node.bbox_min, anc_node.bbox_max, floor);
-        if out.len() < max_boxes as usize
-            && ratio >= threshold
-            && ratio <= MAX_VOLUME_RATIO
-            && n.leaves.len() as u32 >= min_leaves
-        {
-            textured[i] = Some(out.len() as u32);
-            out.push(Selected {
-                node: i as u32,
-                parent: anc,
-            });
+        let ratio = vol[i] / vol[anc];
+        if (threshold..=MAX_VOLUME_RATIO).contains(&ratio) && n.leaves.len() as u32 >= min_leaves {
+            textured[i] = true;
+            count += 1;
         }
+    }
+    // Hierarchy order, each with its nearest textured ancestor as parent box.
+    let mut index = vec![u32::MAX; nodes.len()];
+    let mut out = Vec::with_capacity(count);
+    for (i, n) in nodes.iter().enumerate().filter(|(i, _)| textured[*i]) {
+        let mut a = n.parent;
+        let parent = loop {
+            match a {
+                Some(p) if textured[p as usize] => break index[p as usize],
+                Some(p) => a = nodes[p as usize].parent,
+                None => break u32::MAX,
+            }
+        };
+        index[i] = out.len() as u32;
+        out.push(Selected {
+            node: i as u32,
+            parent,
+        });
     }
     out
 }

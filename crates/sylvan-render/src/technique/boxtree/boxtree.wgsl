@@ -61,6 +61,8 @@ struct ImpostorOut {
     @location(5) @interpolate(flat) scale: f32,
     // The plane normal as drawn (model space; turned towards the viewer for a billboard).
     @location(6) @interpolate(flat) axis: vec3<f32>,
+    // Mip level: log2 of (screen footprint of a pixel on the plane / texel size).
+    @location(7) lod: f32,
 };
 
 fn to_world(p: vec3<f32>, base_scale: vec4<f32>, rot: vec4<f32>) -> vec3<f32> {
@@ -125,6 +127,18 @@ fn impostor_vertex(in: ImpostorIn, toward_world: vec3<f32>, view_proj: mat4x4<f3
     let model = p.centre.xyz + p.u.xyz * ((2.0 * st.x - 1.0) * p.u.w) + p.v.xyz * ((1.0 - 2.0 * st.y) * p.v.w);
     let world = to_world(model, in.base_scale, in.rot);
     out.pos = view_proj * vec4<f32>(world, 1.0);
+    // A texel is 2·half/tile metres; a pixel at distance D covers D / pixels_per_metre metres,
+    // stretched by 1/|cos| across a plane seen obliquely.
+    let texel_m = 2.0 * max(p.u.w, p.v.w) * in.base_scale.w / f32(atlas.tiles.x);
+    var pixel_m = 0.0;
+    if (is_dir) {
+        // Shadow maps: orthographic, one texel per shadow-map texel of the first cascade.
+        let row_x = vec3<f32>(frame.view_proj[0].x, frame.view_proj[1].x, frame.view_proj[2].x);
+        pixel_m = frame.shadow_params.x * 2.0 / max(length(row_x), 1e-6);
+    } else {
+        pixel_m = distance(world, frame.camera.xyz) / max(frame.shadow_params.w, 1.0);
+    }
+    out.lod = max(log2(pixel_m / (texel_m * max(abs(c), 0.2))), 0.0);
     out.uv = st;
     out.world = world;
     out.model = model;
@@ -160,11 +174,16 @@ fn fetch(in: ImpostorOut) -> Texel {
     let per_row = atlas.tiles.y;
     let in_layer = tile % atlas.tiles.z;
     let cell = vec2<f32>(f32(in_layer % per_row), f32(in_layer / per_row));
-    let uv = (cell + clamp(in.uv, vec2<f32>(0.0), vec2<f32>(1.0))) * atlas.params.y;
+    // Explicit level of detail (implicit derivatives are wrong along triangle edges on
+    // llvmpipe, which drew every quad edge as a line of the tile's average colour). Tiles are
+    // packed edge to edge and tightly framed, so the bilinear footprint is also kept inside
+    // this tile at the coarser of the two mips sampled, or neighbours would bleed in.
+    let half = 0.5 * exp2(ceil(in.lod)) / f32(atlas.tiles.x);
+    let uv = (cell + clamp(in.uv, vec2<f32>(half), vec2<f32>(1.0 - half))) * atlas.params.y;
     let layer = i32(tile / atlas.tiles.z);
     var t: Texel;
-    t.color = textureSample(atlas_color, atlas_sampler, uv, layer);
-    t.normal_depth = textureSample(atlas_normal, atlas_sampler, uv, layer);
+    t.color = textureSampleLevel(atlas_color, atlas_sampler, uv, layer, in.lod);
+    t.normal_depth = textureSampleLevel(atlas_normal, atlas_sampler, uv, layer, in.lod);
     t.image = image;
     return t;
 }

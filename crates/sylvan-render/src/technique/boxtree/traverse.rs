@@ -49,6 +49,9 @@ impl Placement {
     }
 }
 
+/// Presences this close to 0 or 1 are snapped (see [`traverse`]).
+pub const SNAP: f32 = 0.02;
+
 /// The LOD distance of a box (metres): where one of its texels covers one pixel.
 pub fn lod_distance(b: &BakedBox, scale: f32, view: &LodView) -> f32 {
     b.metres_per_texel * scale * view.pixels_per_metre
@@ -79,11 +82,20 @@ pub fn traverse(
         let centre = (Vec3::from(bx.min) + Vec3::from(bx.max)) * 0.5;
         let d = at.to_world(centre).distance(view.eye);
         let t = impostor_presence(d, lod_distance(bx, at.scale, view), view.band);
+        // Within 2% of either end of the band, snap: a sliver of presence would cost a whole
+        // draw of the other representation for an invisible contribution.
+        let t = if t < SNAP {
+            0.0
+        } else if t > 1.0 - SNAP {
+            1.0
+        } else {
+            t
+        };
         if t > 0.0 {
             impostor(b, w * t, d);
         }
         let open = w * (1.0 - t);
-        if open > 1e-4 {
+        if open > 0.0 {
             residual(b, open);
             stack.extend(bx.children.iter().map(|&c| (c, open)));
         }

@@ -1,0 +1,171 @@
+//! GPU pieces shared by the image-based techniques: a per-frame instance buffer that grows but
+//! never shrinks, and an atlas of square tiles with per-tile mips in a `texture_2d_array`.
+//!
+//! (`boxtree` has its own copies of both, written first; they can move onto these.)
+
+use crate::RenderError;
+use sylvan_gpu::Gpu;
+
+/// A vertex buffer that grows (doubling) when a frame needs more, and never shrinks.
+pub(crate) struct Growable {
+    pub(crate) buffer: wgpu::Buffer,
+    label: &'static str,
+    pub(crate) reallocations: u32,
+}
+
+impl Growable {
+    pub(crate) fn new(gpu: &Gpu, label: &'static str, bytes: u64) -> Self {
+        Self {
+            buffer: Self::make(gpu, label, bytes.max(256)),
+            label,
+            reallocations: 0,
+        }
+    }
+
+    fn make(gpu: &Gpu, label: &str, size: u64) -> wgpu::Buffer {
+        gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size,
+            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    }
+
+    /// Writes `data` at offset 0, growing the buffer first when it is too small.
+    pub(crate) fn write(&mut self, gpu: &Gpu, data: &[u8]) -> Result<(), RenderError> {
+        let need = data.len() as u64;
+        if need > self.buffer.size() {
+            let limit = gpu.device.limits().max_buffer_size;
+            let size = need.next_power_of_two().min(limit);
+            if need > size {
+                return Err(RenderError::Gpu(sylvan_gpu::GpuError::Limit {
+                    what: format!("{} instance buffer", self.label),
+                    needed: need,
+                    limit,
+                    fix: "lower the tree count".into(),
+                }));
+            }
+            self.buffer = Self::make(gpu, self.label, size);
+            self.reallocations += 1;
+        }
+        if !data.is_empty() {
+            gpu.queue.write_buffer(&self.buffer, 0, data);
+        }
+        Ok(())
+    }
+}
+
+/// Side of one atlas layer, at most (texels).
+const LAYER_SIZE: u32 = 2048;
+
+/// Square tiles of one size packed row-major into square layers of a 2D array texture; each
+/// tile keeps its own mip chain (tile sizes are powers of two, so mip `m` of the atlas holds
+/// mip `m` of every tile at the same cell).
+pub(crate) struct TileAtlas {
+    pub(crate) texture: wgpu::Texture,
+    /// Tiles per row (and per column) of a layer.
+    pub(crate) per_row: u32,
+    /// Tiles per layer.
+    pub(crate) per_layer: u32,
+    /// GPU bytes (all mips).
+    pub(crate) bytes: u64,
+}
+
+impl TileAtlas {
+    /// Uploads `tiles[i][mip]` (RGBA8, `(tile >> mip)²·4` bytes each; a power-of-two `tile`).
+    pub(crate) fn upload(
+        gpu: &Gpu,
+        label: &str,
+        format: wgpu::TextureFormat,
+        tile: u32,
+        tiles: &[&[Vec<u8>]],
+    ) -> Result<Self, RenderError> {
+        let limits = gpu.device.limits();
+        let max_row = (LAYER_SIZE.min(limits.max_texture_dimension_2d) / tile).max(1);
+        let per_row = ((tiles.len() as f64).sqrt().ceil() as u32)
+            .max(1)
+            .next_power_of_two()
+            .min(max_row);
+        let layer = per_row * tile;
+        let per_layer = per_row * per_row;
+        let layers = (tiles.len() as u32).div_ceil(per_layer).max(1);
+        if layers > limits.max_texture_array_layers {
+            return Err(RenderError::Gpu(sylvan_gpu::GpuError::Limit {
+                what: format!("{label} layers"),
+                needed: layers as u64,
+                limit: limits.max_texture_array_layers as u64,
+                fix: "use smaller tiles or fewer directions".into(),
+            }));
+        }
+        let mips = tile.ilog2() + 1;
+        let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width: layer,
+                height: layer,
+                depth_or_array_layers: layers,
+            },
+            mip_level_count: mips,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        });
+        for (t, levels) in tiles.iter().enumerate() {
+            let t = t as u32;
+            let (l, cell) = (t / per_layer, t % per_layer);
+            let (cx, cy) = (cell % per_row, cell / per_row);
+            for (m, data) in levels.iter().enumerate().take(mips as usize) {
+                let size = (tile >> m).max(1);
+                if data.len() != (size * size * 4) as usize {
+                    return Err(RenderError::Plant(format!(
+                        "{label}: tile {t} mip {m} has {} bytes, expected {}",
+                        data.len(),
+                        size * size * 4
+                    )));
+                }
+                gpu.queue.write_texture(
+                    wgpu::TexelCopyTextureInfo {
+                        texture: &texture,
+                        mip_level: m as u32,
+                        origin: wgpu::Origin3d {
+                            x: cx * size,
+                            y: cy * size,
+                            z: l,
+                        },
+                        aspect: wgpu::TextureAspect::All,
+                    },
+                    data,
+                    wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(size * 4),
+                        rows_per_image: Some(size),
+                    },
+                    wgpu::Extent3d {
+                        width: size,
+                        height: size,
+                        depth_or_array_layers: 1,
+                    },
+                );
+            }
+        }
+        let bytes = (0..mips)
+            .map(|m| ((layer >> m).max(1) as u64).pow(2) * 4 * layers as u64)
+            .sum();
+        Ok(Self {
+            texture,
+            per_row,
+            per_layer,
+            bytes,
+        })
+    }
+
+    /// A `D2Array` view of every layer and mip.
+    pub(crate) fn view(&self) -> wgpu::TextureView {
+        self.texture.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        })
+    }
+}

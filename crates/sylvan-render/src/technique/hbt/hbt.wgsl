@@ -1,0 +1,262 @@
+// Technique `hbt` (MNP01 §4.1, appendix): per tree, the 9 BTF images of the 3 view samples × 3
+// light samples enclosing the eye and sun directions, summed with their weights in one
+// fragment, plus the 3 ambient images; composited premultiplied over the background.
+
+struct HbtSpecies {
+    // xyz: plant bounding box minimum (model space); w: bounding-sphere radius.
+    min: vec4<f32>,
+    // xyz: maximum.
+    max: vec4<f32>,
+    // x: first direct tile; y: light samples; z: first ambient tile; w: first sample frame.
+    info: vec4<u32>,
+    // x: view samples.
+    counts: vec4<u32>,
+};
+
+// The orthographic frame a view sample was baked in (see `bake::view_frame`).
+struct SampleFrame {
+    // xyz: image right axis; w: half extent along it.
+    u: vec4<f32>,
+    // xyz: image up axis; w: half extent.
+    v: vec4<f32>,
+    // xyz: towards the eye; w: half depth.
+    f: vec4<f32>,
+};
+
+struct HbtAtlas {
+    // x: tile texels; y: tiles per row; z: tiles per layer; w: 1 for cross projection.
+    tiles: vec4<u32>,
+    // x: 1 / tiles per row; y: finest mip's texels per metre scale (unused); z, w: unused.
+    params: vec4<f32>,
+};
+
+@group(1) @binding(0) var<storage, read> species_info: array<HbtSpecies>;
+@group(1) @binding(1) var<storage, read> frames: array<SampleFrame>;
+@group(1) @binding(2) var atlas_color: texture_2d_array<f32>;
+@group(1) @binding(3) var atlas_sampler: sampler;
+@group(1) @binding(4) var<uniform> atlas: HbtAtlas;
+
+struct HbtIn {
+    @builtin(vertex_index) vertex: u32,
+    // xyz trunk base, w uniform scale.
+    @location(4) base_scale: vec4<f32>,
+    // x cos(rotation), y sin(rotation), z tint seed, w presence.
+    @location(5) rot: vec4<f32>,
+    // xyz: the 3 view samples; w: species.
+    @location(6) views: vec4<u32>,
+    // xyz: the 3 light samples.
+    @location(7) lights: vec4<u32>,
+    // Pair weights w[3·view + light], row-major.
+    @location(8) w0: vec4<f32>,
+    @location(9) w1: vec4<f32>,
+    @location(10) w2: vec4<f32>,
+};
+
+struct HbtOut {
+    @builtin(position) pos: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    // Model-space point on the quad.
+    @location(1) model: vec3<f32>,
+    @location(2) @interpolate(flat) views: vec4<u32>,
+    @location(3) @interpolate(flat) lights: vec4<u32>,
+    @location(4) @interpolate(flat) w0: vec4<f32>,
+    @location(5) @interpolate(flat) w1: vec4<f32>,
+    @location(6) @interpolate(flat) w2: vec4<f32>,
+    // x: first view row, y: end row (cross: one row per quad); z: unused.
+    @location(7) @interpolate(flat) rows: vec4<u32>,
+    // x: tint seed; y: presence; z: uniform scale.
+    @location(8) @interpolate(flat) extra: vec4<f32>,
+};
+
+fn hbt_to_world(p: vec3<f32>, base_scale: vec4<f32>, rot: vec4<f32>) -> vec3<f32> {
+    let q = p * base_scale.w;
+    return vec3<f32>(rot.x * q.x + rot.y * q.z, q.y, -rot.y * q.x + rot.x * q.z) + base_scale.xyz;
+}
+
+// World direction → model space (inverse rotation about Y).
+fn hbt_to_model_dir(d: vec3<f32>, rot: vec4<f32>) -> vec3<f32> {
+    return vec3<f32>(rot.x * d.x - rot.y * d.z, d.y, rot.y * d.x + rot.x * d.z);
+}
+
+fn pair_weight(in: HbtOut, k: u32) -> f32 {
+    if (k < 4u) {
+        return in.w0[k];
+    }
+    if (k < 8u) {
+        return in.w1[k - 4u];
+    }
+    return in.w2[k - 8u];
+}
+
+fn hidden() -> HbtOut {
+    var out: HbtOut;
+    out.pos = vec4<f32>(0.0, 0.0, -2.0, 1.0);
+    return out;
+}
+
+// A quad through the box centre: facing `toward` (world; a point when `is_dir` is false) for
+// facing projection, or the frame of view row `quad` for cross projection.
+fn hbt_vertex(in: HbtIn, toward_world: vec3<f32>, view_proj: mat4x4<f32>, is_dir: bool, cross_mode: bool) -> HbtOut {
+    let sp = species_info[in.views.w];
+    let quad = in.vertex / 6u;
+    let corner = in.vertex % 6u;
+    let lo = sp.min.xyz;
+    let hi = sp.max.xyz;
+    let centre = (lo + hi) * 0.5;
+    let h = (hi - lo) * 0.5;
+    var u: vec3<f32>;
+    var v: vec3<f32>;
+    var hu: f32;
+    var hv: f32;
+    var rows = vec4<u32>(0u, 3u, 0u, 0u);
+    if (cross_mode) {
+        var ws = array<f32, 9>(in.w0.x, in.w0.y, in.w0.z, in.w0.w, in.w1.x, in.w1.y, in.w1.z, in.w1.w, in.w2.x);
+        if (quad >= 3u) {
+            return hidden();
+        }
+        let a = ws[quad * 3u] + ws[quad * 3u + 1u] + ws[quad * 3u + 2u];
+        if (a <= 0.0) {
+            return hidden();
+        }
+        let fr = frames[sp.info.w + in.views[quad]];
+        u = fr.u.xyz;
+        v = fr.v.xyz;
+        hu = fr.u.w;
+        hv = fr.v.w;
+        rows = vec4<u32>(quad, quad + 1u, 0u, 0u);
+    } else {
+        if (quad > 0u) {
+            return hidden();
+        }
+        var toward = toward_world;
+        if (!is_dir) {
+            toward = toward_world - hbt_to_world(centre, in.base_scale, in.rot);
+        }
+        let f = normalize(hbt_to_model_dir(toward, in.rot));
+        let up = select(vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 1.0, 0.0), abs(f.y) < 0.99);
+        v = normalize(up - f * dot(up, f));
+        u = cross(v, f);
+        // The box's projection along f (as `PlaneFrame::for_box`), a little wider so the
+        // samples' frames (baked with a free border) are covered.
+        hu = dot(abs(u), h) * 1.1;
+        hv = dot(abs(v), h) * 1.1;
+    }
+    let st = array<vec2<f32>, 6>(
+        vec2<f32>(0.0, 1.0), vec2<f32>(1.0, 1.0), vec2<f32>(1.0, 0.0),
+        vec2<f32>(0.0, 1.0), vec2<f32>(1.0, 0.0), vec2<f32>(0.0, 0.0),
+    )[corner];
+    let model = centre + u * ((2.0 * st.x - 1.0) * hu) + v * ((1.0 - 2.0 * st.y) * hv);
+    let world = hbt_to_world(model, in.base_scale, in.rot);
+    var out: HbtOut;
+    out.pos = view_proj * vec4<f32>(world, 1.0);
+    out.world = world;
+    out.model = model;
+    out.views = in.views;
+    out.lights = in.lights;
+    out.w0 = in.w0;
+    out.w1 = in.w1;
+    out.w2 = in.w2;
+    out.rows = rows;
+    out.extra = vec4<f32>(in.rot.z, in.rot.w, in.base_scale.w, 0.0);
+    return out;
+}
+
+// Image coordinates of a model-space point in view sample `view`'s frame; outside [0, 1]²
+// the image is empty.
+fn sample_uv(sp: HbtSpecies, view: u32, model: vec3<f32>) -> vec2<f32> {
+    let fr = frames[sp.info.w + view];
+    let q = model - (sp.min.xyz + sp.max.xyz) * 0.5;
+    return vec2<f32>(dot(q, fr.u.xyz) / fr.u.w * 0.5 + 0.5, 0.5 - dot(q, fr.v.xyz) / fr.v.w * 0.5);
+}
+
+fn fetch(tile: u32, uv: vec2<f32>, lod: f32) -> vec4<f32> {
+    let per_row = atlas.tiles.y;
+    let in_layer = tile % atlas.tiles.z;
+    let cell = vec2<f32>(f32(in_layer % per_row), f32(in_layer / per_row));
+    let a = (cell + clamp(uv, vec2<f32>(0.0), vec2<f32>(1.0))) * atlas.params.x;
+    return textureSampleLevel(atlas_color, atlas_sampler, a, i32(tile / atlas.tiles.z), lod);
+}
+
+fn inside(uv: vec2<f32>) -> bool {
+    return all(uv >= vec2<f32>(0.0)) && all(uv <= vec2<f32>(1.0));
+}
+
+// Mip level: texels of the first view sample's image per pixel.
+fn image_lod(sp: HbtSpecies, in: HbtOut) -> f32 {
+    let fr = frames[sp.info.w + in.views.x];
+    let metres_per_texel = 2.0 * max(fr.u.w, fr.v.w) / f32(atlas.tiles.x);
+    let footprint = max(length(dpdx(in.model)), length(dpdy(in.model)));
+    return max(log2(max(footprint, 1e-9) / metres_per_texel), 0.0);
+}
+
+@vertex
+fn vs_hbt(in: HbtIn) -> HbtOut {
+    return hbt_vertex(in, frame.camera.xyz, frame.view_proj, false, atlas.tiles.w == 1u);
+}
+
+@fragment
+fn fs_hbt(in: HbtOut) -> @location(0) vec4<f32> {
+    let sp = species_info[in.views.w];
+    let lod = image_lod(sp, in);
+    let lights = sp.info.y;
+    let views = sp.counts.x;
+    var direct = vec4<f32>(0.0);
+    var sky = vec3<f32>(0.0);
+    var ground = vec3<f32>(0.0);
+    for (var i = in.rows.x; i < in.rows.y; i = i + 1u) {
+        let view = in.views[i];
+        let uv = sample_uv(sp, view, in.model);
+        let a = pair_weight(in, 3u * i) + pair_weight(in, 3u * i + 1u) + pair_weight(in, 3u * i + 2u);
+        if (a <= 0.0 || !inside(uv)) {
+            continue;
+        }
+        for (var j = 0u; j < 3u; j = j + 1u) {
+            let w = pair_weight(in, 3u * i + j);
+            if (w > 0.0) {
+                direct = direct + w * fetch(sp.info.x + view * lights + in.lights[j], uv, lod);
+            }
+        }
+        sky = sky + a * fetch(sp.info.z + view, uv, lod).rgb;
+        ground = ground + a * fetch(sp.info.z + views + view, uv, lod).rgb;
+    }
+    let alpha = min(direct.a * in.extra.y, 1.0);
+    if (alpha < 0.002) {
+        discard;
+    }
+    let tint = 0.85 + 0.3 * in.extra.x;
+    let tint3 = vec3<f32>(tint, mix(tint, 1.0, 0.5), 1.0);
+    // Received shadow: the scene's shadow map just outside the tree towards the sun (the tree's
+    // own shadowing is in the BTF).
+    let radius = sp.min.w * in.extra.z;
+    let vis = sun_visibility(in.world + frame.sun_dir.xyz * radius, vec3<f32>(0.0));
+    let sky_color = mix(frame.sky_horizon.rgb, frame.sky_zenith.rgb, 0.5);
+    let lit = tint3 * in.extra.y * (frame.sun_color.rgb * vis * direct.rgb
+        + sky_color * sky + frame.sky_ground.rgb * ground);
+    let fogged = apply_fog_premultiplied(lit, alpha, in.world);
+    return vec4<f32>(debug_tint(fogged / alpha, in.world, 2) * alpha, alpha);
+}
+
+// Shadow casters: the quad facing the sun, each texel occluding with probability equal to the
+// reconstructed coverage seen from the sun (the 3×3 PCF turns that into soft shadow).
+@vertex
+fn vs_hbt_shadow(in: HbtIn) -> HbtOut {
+    return hbt_vertex(in, frame.sun_dir.xyz, frame.view_proj, true, false);
+}
+
+@fragment
+fn fs_hbt_shadow(in: HbtOut) {
+    let sp = species_info[in.views.w];
+    let lod = image_lod(sp, in);
+    var alpha = 0.0;
+    for (var i = 0u; i < 3u; i = i + 1u) {
+        let view = in.views[i];
+        let uv = sample_uv(sp, view, in.model);
+        let a = pair_weight(in, 3u * i) + pair_weight(in, 3u * i + 1u) + pair_weight(in, 3u * i + 2u);
+        if (a > 0.0 && inside(uv)) {
+            alpha = alpha + a * fetch(sp.info.z + view, uv, lod).a;
+        }
+    }
+    if (alpha * in.extra.y <= hash13(vec3<f32>(in.pos.xy, 3.0))) {
+        discard;
+    }
+}
