@@ -16,7 +16,7 @@ export XDG_RUNTIME_DIR=${XDG_RUNTIME_DIR:-/tmp/sylvan-xdg}
 mkdir -p -m 0700 "$XDG_RUNTIME_DIR"
 cargo build --release -q -p sylvan
 S=target/release/sylvan
-flip() { $S compare "$1" "$2" --json | python3 -c 'import json,sys; print("%.4f" % json.load(sys.stdin)["flip_mean"])'; }
+flip() { $S compare "$1" "$2" --json "${@:3}" | python3 -c 'import json,sys; print("%.4f" % json.load(sys.stdin)["flip_mean"])'; }
 field() { python3 -c "import json,sys; d=json.load(sys.stdin); print(d$1)"; }
 
 echo "## Bake time and memory per preset (sylvan bake --no-cache --json)"
@@ -33,7 +33,7 @@ done
 texels=$($S bake --preset pine --json | python3 -c 'import json,sys; d=json.load(sys.stdin); print(d["images"]*d["tile"]**2)')
 bb_tile=$(python3 -c "import math; print(2**round(math.log2(math.sqrt($texels))))")
 echo
-echo "## One pine (16 m), 640x480, fov 40: FLIP vs geometry --spp 16 (lower is better)"
+echo "## One pine (16 m), 640x480, fov 40: FLIP vs geometry --spp 16 around the tree (lower is better)"
 echo "boxtree pine: $texels texels of images; naive billboard: one ${bb_tile}² image"
 echo "| apparent height | distance m | geometry 1 spp | boxtree diagonal | boxtree axis | naive billboard |"
 echo "|---|---|---|---|---|---|"
@@ -45,11 +45,13 @@ for h in 400 200 100 50; do
   common=(--size 640x480 --camera "$cam")
   $S render $SCENE "${common[@]}" --spp 16 --out "$OUT/tree-$h-ref.png" 2>>"$OUT/log.txt"
   $S render $SCENE "${common[@]}" --out "$OUT/tree-$h-geometry.png" 2>>"$OUT/log.txt"
-  $S render $SCENE "${common[@]}" --technique boxtree --out "$OUT/tree-$h-diagonal.png" 2>>"$OUT/log.txt"
+  $S render $SCENE "${common[@]}" --technique boxtree --planes diagonal --out "$OUT/tree-$h-diagonal.png" 2>>"$OUT/log.txt"
   $S render $SCENE "${common[@]}" --technique boxtree --planes axis --out "$OUT/tree-$h-axis.png" 2>>"$OUT/log.txt"
   $S render $SCENE "${common[@]}" --technique boxtree --planes billboard --tile "$bb_tile" --max-boxes 1 --texel-pixels 64 --out "$OUT/tree-$h-billboard.png" 2>>"$OUT/log.txt"
   r="$OUT/tree-$h-ref.png"
-  echo "| $h px | $d | $(flip $r "$OUT/tree-$h-geometry.png") | $(flip $r "$OUT/tree-$h-diagonal.png") | $(flip $r "$OUT/tree-$h-axis.png") | $(flip $r "$OUT/tree-$h-billboard.png") |"
+  # FLIP over a square of 1.3 × the tree's apparent height around it (clipped to the frame).
+  crop=(--crop "$(python3 -c "h=$h; s=int(1.3*h); print(f'{max(320-s//2,0)},{max(240-s//2,0)},{s},{s}')")")
+  echo "| $h px | $d | $(flip $r "$OUT/tree-$h-geometry.png" "${crop[@]}") | $(flip $r "$OUT/tree-$h-diagonal.png" "${crop[@]}") | $(flip $r "$OUT/tree-$h-axis.png" "${crop[@]}") | $(flip $r "$OUT/tree-$h-billboard.png" "${crop[@]}") |"
 done
 
 echo
@@ -59,7 +61,7 @@ echo "|---|---|---|---|---|"
 for size in 480x270 1280x720; do
   $S render --size $size --spp 16 --out "$OUT/default-$size-ref.png" 2>>"$OUT/log.txt"
   $S render --size $size --out "$OUT/default-$size-geometry.png" 2>>"$OUT/log.txt"
-  $S render --size $size --technique boxtree --out "$OUT/default-$size-diagonal.png" 2>>"$OUT/log.txt"
+  $S render --size $size --technique boxtree --planes diagonal --out "$OUT/default-$size-diagonal.png" 2>>"$OUT/log.txt"
   $S render --size $size --technique boxtree --planes axis --out "$OUT/default-$size-axis.png" 2>>"$OUT/log.txt"
   r="$OUT/default-$size-ref.png"
   g=$(flip $r "$OUT/default-$size-geometry.png")

@@ -146,6 +146,58 @@ impl Instances {
             .write_buffer(&self.buffer, 0, bytemuck::cast_slice(&self.staging));
     }
 
+    /// An empty list for `species_count` species, filled each frame from another list by
+    /// [`Instances::fill_from`] (one band of a level-of-detail chain). Its buffer holds
+    /// `capacity` records, the master list's worst case.
+    pub fn derived(gpu: &Gpu, capacity: usize, species_count: usize) -> Self {
+        let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("tree_instances_band"),
+            size: (capacity.max(1) * std::mem::size_of::<GpuTreeInstance>()) as u64,
+            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Self {
+            placed: Vec::new(),
+            staging: Vec::with_capacity(capacity),
+            buffer,
+            ranges: vec![vec![0..0; species_count]; 1 + CASCADES],
+            species_count,
+        }
+    }
+
+    /// Refills this list from `master`: every record for which `presence(record)` is above 0
+    /// is kept with that presence in `rot.w` (multiplied into the master's), per pass and
+    /// species, and uploaded.
+    pub fn fill_from(
+        &mut self,
+        gpu: &Gpu,
+        master: &Instances,
+        mut presence: impl FnMut(&GpuTreeInstance) -> f32,
+    ) {
+        self.staging.clear();
+        for pass in 0..=CASCADES {
+            for species in 0..self.species_count.min(master.species_count) {
+                let start = self.staging.len() as u32;
+                for rec in master.records(pass, species) {
+                    let p = presence(rec);
+                    if p > 0.0 {
+                        let mut r = *rec;
+                        r.rot[3] *= p;
+                        self.staging.push(r);
+                    }
+                }
+                self.ranges[pass][species] = start..self.staging.len() as u32;
+            }
+        }
+        gpu.queue
+            .write_buffer(&self.buffer, 0, bytemuck::cast_slice(&self.staging));
+    }
+
+    /// Placed trees' capacity over all passes (for derived lists).
+    pub fn capacity(&self) -> usize {
+        self.placed.len().max(1) * (1 + CASCADES)
+    }
+
     /// This frame's instances of `species` in `pass` (0 the camera, `1 + c` cascade `c`), as
     /// uploaded.
     pub fn records(&self, pass: usize, species: usize) -> &[GpuTreeInstance] {

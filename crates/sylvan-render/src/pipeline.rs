@@ -125,6 +125,7 @@ pub fn shader_sources() -> Vec<(&'static str, String)> {
             "boxtree",
             with_frame(include_str!("technique/boxtree/boxtree.wgsl")),
         ),
+        ("hbt", with_frame(include_str!("technique/hbt/hbt.wgsl"))),
         ("bake", include_str!("bake/bake.wgsl").to_string()),
     ]
 }

@@ -6,8 +6,9 @@ use crate::frame::{self, CASCADES, DebugView, FrameResources, Frustum, GpuFrame,
 use crate::instances::{Instances, SpeciesBounds};
 use crate::pipeline::HDR_FORMAT;
 use crate::sky::SkyPass;
-use crate::technique::any::{AnyTechnique, BakeProgress};
+use crate::technique::any::{AnyTechnique, BakeProgress, PrepareInput};
 use crate::technique::boxtree::BoxTreeParams;
+use crate::technique::hbt::HbtParams;
 use crate::technique::{DrawContext, DrawCounts, FrameInput, TechniqueKind};
 use crate::terrain::TerrainPass;
 use glam::{Mat4, Vec3};
@@ -44,6 +45,8 @@ pub struct RenderOptions {
     pub debug: DebugView,
     /// Parameters of the `boxtree` technique.
     pub boxtree: BoxTreeParams,
+    /// Parameters of the `hbt` technique.
+    pub hbt: HbtParams,
     /// Where baked assets are cached.
     pub cache: CachePolicy,
 }
@@ -62,6 +65,7 @@ impl Default for RenderOptions {
             wall_timer: false,
             debug: DebugView::None,
             boxtree: BoxTreeParams::default(),
+            hbt: HbtParams::default(),
             cache: CachePolicy::Default,
         }
     }
@@ -183,15 +187,6 @@ impl Renderer {
         let frame = FrameResources::new(gpu, res);
         let resolver = Resolver::new(gpu);
         let targets = Self::make_targets(gpu, &resolver, options.width, options.height, factor)?;
-        let (technique, bake_reports) = AnyTechnique::prepare(
-            gpu,
-            &frame,
-            plants,
-            options.technique,
-            &options.boxtree,
-            &options.cache,
-            progress,
-        )?;
         let bounds: Vec<SpeciesBounds> = plants
             .iter()
             .map(|p| SpeciesBounds {
@@ -200,6 +195,20 @@ impl Renderer {
             })
             .collect();
         let instances = Instances::new(gpu, &scene.trees, &bounds);
+        let (technique, bake_reports) = AnyTechnique::prepare(
+            gpu,
+            &frame,
+            plants,
+            &PrepareInput {
+                kind: options.technique,
+                boxtree: &options.boxtree,
+                hbt: &options.hbt,
+                policy: &options.cache,
+                lod_chain: &scene.lod_chain,
+                instances: &instances,
+            },
+            progress,
+        )?;
         let t = &scene.terrain;
         let (lo, hi) = t
             .heights
@@ -307,7 +316,15 @@ impl Renderer {
         let input = FrameInput {
             eye: view.eye,
             pixels_per_metre: self.targets.output.height as f32 / (2.0 * (view.fov_y * 0.5).tan()),
+            sun_dir,
             instances: &self.instances,
+            shadow_texel_m: cascades.map(|c| {
+                let m = c.view_proj;
+                // An orthographic cascade maps 2 / |row x| metres onto its resolution.
+                let row_x = Vec3::new(m.x_axis.x, m.y_axis.x, m.z_axis.x).length();
+                2.0 / row_x.max(1e-9) / self.frame.shadow_resolution as f32
+            }),
+            cascade_far: cascades.map(|c| c.far),
         };
         self.technique.update(gpu, &input)?;
 
@@ -411,10 +428,12 @@ impl Renderer {
             frame_ms,
             timer: self.timer.kind(),
             trees_total: self.instances.total(),
-            trees_drawn: BTreeMap::from([(
-                self.technique.name().to_string(),
-                self.instances.drawn(),
-            )]),
+            trees_drawn: self
+                .technique
+                .trees_drawn(&self.instances)
+                .into_iter()
+                .map(|(name, n)| (name.to_string(), n))
+                .collect(),
             triangles: main_counts.triangles,
             shadow_triangles: shadow_counts.triangles,
             draw_calls: main_counts.draw_calls + shadow_counts.draw_calls + 1,

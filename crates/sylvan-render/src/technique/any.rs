@@ -3,10 +3,13 @@
 
 use super::boxtree::{BoxTree, BoxTreeParams};
 use super::geometry::Geometry;
+use super::hbt::{Hbt, HbtParams};
+use super::lod::{self, Band};
 use super::{DrawContext, DrawCounts, FrameInput, Representation, TechniqueKind};
 use crate::RenderError;
 use crate::bake::{self, BakeReport, CachePolicy};
 use crate::frame::FrameResources;
+use crate::instances::Instances;
 use sylvan_gpu::Gpu;
 use sylvan_plant::Plant;
 
@@ -17,6 +20,27 @@ pub type BakeProgress<'a> = &'a mut dyn FnMut(&str, usize, usize);
 pub(crate) enum AnyTechnique {
     Geometry(Geometry),
     BoxTree(Box<BoxTree>),
+    Hbt(Box<Hbt>),
+    Auto(Box<Chain>),
+}
+
+/// The `auto` chain: a technique and an instance list per band.
+pub(crate) struct Chain {
+    bands: Vec<Band>,
+    techniques: Vec<AnyTechnique>,
+    lists: Vec<Instances>,
+}
+
+/// What the renderer passes to [`AnyTechnique::prepare`].
+pub(crate) struct PrepareInput<'a> {
+    pub kind: TechniqueKind,
+    pub boxtree: &'a BoxTreeParams,
+    pub hbt: &'a HbtParams,
+    pub policy: &'a CachePolicy,
+    /// The scene's `[lod] chain` (for `auto`).
+    pub lod_chain: &'a [String],
+    /// The frame's instance list (its capacity sizes the chain's band lists).
+    pub instances: &'a Instances,
 }
 
 /// Bakes (or reads from the cache) `R`'s asset for each plant — once per distinct plant — and
@@ -59,22 +83,71 @@ impl AnyTechnique {
         gpu: &Gpu,
         frame: &FrameResources,
         plants: &[Plant],
-        kind: TechniqueKind,
-        boxtree: &BoxTreeParams,
-        policy: &CachePolicy,
+        input: &PrepareInput<'_>,
         progress: BakeProgress<'_>,
     ) -> Result<(Self, Vec<BakeReport>), RenderError> {
-        match kind {
+        let policy = input.policy;
+        match input.kind {
             TechniqueKind::Geometry => {
                 let (g, r) = prepare_baked::<Geometry>(gpu, frame, plants, &(), policy, progress)?;
                 Ok((Self::Geometry(g), r))
             }
             TechniqueKind::BoxTree => {
                 let (b, r) =
-                    prepare_baked::<BoxTree>(gpu, frame, plants, boxtree, policy, progress)?;
+                    prepare_baked::<BoxTree>(gpu, frame, plants, input.boxtree, policy, progress)?;
                 Ok((Self::BoxTree(Box::new(b)), r))
             }
+            TechniqueKind::Hbt => {
+                let (h, r) = prepare_baked::<Hbt>(gpu, frame, plants, input.hbt, policy, progress)?;
+                Ok((Self::Hbt(Box::new(h)), r))
+            }
+            TechniqueKind::Auto => {
+                let bands = lod::parse_chain(input.lod_chain)?;
+                let mut techniques = Vec::with_capacity(bands.len());
+                let mut reports = Vec::new();
+                let mut lists = Vec::with_capacity(bands.len());
+                for band in &bands {
+                    let sub = PrepareInput {
+                        kind: band.technique,
+                        ..*input
+                    };
+                    let (t, r) = Self::prepare(gpu, frame, plants, &sub, progress)?;
+                    techniques.push(t);
+                    reports.extend(r);
+                    lists.push(Instances::derived(
+                        gpu,
+                        input.instances.capacity(),
+                        input.instances.species_count(),
+                    ));
+                }
+                Ok((
+                    Self::Auto(Box::new(Chain {
+                        bands,
+                        techniques,
+                        lists,
+                    })),
+                    reports,
+                ))
+            }
             other => Err(RenderError::NotImplemented(other.name())),
+        }
+    }
+
+    /// Trees drawn in the camera view per technique name (for `auto`, per band technique).
+    pub(crate) fn trees_drawn(&self, master: &Instances) -> Vec<(&'static str, u32)> {
+        match self {
+            Self::Auto(c) => {
+                let mut out: Vec<(&'static str, u32)> = Vec::new();
+                for (t, list) in c.techniques.iter().zip(&c.lists) {
+                    let n = list.drawn();
+                    match out.iter_mut().find(|(name, _)| *name == t.name()) {
+                        Some(e) => e.1 += n,
+                        None => out.push((t.name(), n)),
+                    }
+                }
+                out
+            }
+            t => vec![(t.name(), master.drawn())],
         }
     }
 
@@ -82,6 +155,8 @@ impl AnyTechnique {
         match self {
             Self::Geometry(_) => Geometry::NAME,
             Self::BoxTree(_) => BoxTree::NAME,
+            Self::Hbt(_) => Hbt::NAME,
+            Self::Auto(_) => "auto",
         }
     }
 
@@ -89,6 +164,18 @@ impl AnyTechnique {
         match self {
             Self::Geometry(t) => t.update(gpu, input),
             Self::BoxTree(t) => t.update(gpu, input),
+            Self::Hbt(t) => t.update(gpu, input),
+            Self::Auto(c) => {
+                lod::split(gpu, &c.bands, &mut c.lists, input.instances, input.eye);
+                for (t, list) in c.techniques.iter_mut().zip(&c.lists) {
+                    let sub = FrameInput {
+                        instances: list,
+                        ..*input
+                    };
+                    t.update(gpu, &sub)?;
+                }
+                Ok(())
+            }
         }
     }
 
@@ -100,6 +187,8 @@ impl AnyTechnique {
         match self {
             Self::Geometry(t) => t.draw(pass, ctx),
             Self::BoxTree(t) => t.draw(pass, ctx),
+            Self::Hbt(t) => t.draw(pass, ctx),
+            Self::Auto(c) => c.each(ctx, |t, sub| t.draw(pass, sub)),
         }
     }
 
@@ -111,6 +200,8 @@ impl AnyTechnique {
         match self {
             Self::Geometry(t) => t.draw_shadow(pass, ctx),
             Self::BoxTree(t) => t.draw_shadow(pass, ctx),
+            Self::Hbt(t) => t.draw_shadow(pass, ctx),
+            Self::Auto(c) => c.each(ctx, |t, sub| t.draw_shadow(pass, sub)),
         }
     }
 
@@ -118,6 +209,11 @@ impl AnyTechnique {
         match self {
             Self::Geometry(t) => t.bytes(),
             Self::BoxTree(t) => t.bytes(),
+            Self::Hbt(t) => t.bytes(),
+            Self::Auto(c) => {
+                c.techniques.iter().map(AnyTechnique::bytes).sum::<u64>()
+                    + c.lists.iter().map(|l| l.buffer().size()).sum::<u64>()
+            }
         }
     }
 
@@ -126,6 +222,29 @@ impl AnyTechnique {
         match self {
             Self::Geometry(_) => 0,
             Self::BoxTree(t) => t.reallocations(),
+            Self::Hbt(t) => t.reallocations(),
+            Self::Auto(c) => c.techniques.iter().map(AnyTechnique::reallocations).sum(),
         }
+    }
+}
+
+impl Chain {
+    /// Calls `f` for each band's technique with the pass context re-pointed at its list.
+    fn each(
+        &self,
+        ctx: &DrawContext<'_>,
+        mut f: impl FnMut(&AnyTechnique, &DrawContext<'_>) -> DrawCounts,
+    ) -> DrawCounts {
+        let mut counts = DrawCounts::default();
+        for (t, list) in self.techniques.iter().zip(&self.lists) {
+            let sub = DrawContext {
+                pass: ctx.pass,
+                frame_bind: ctx.frame_bind,
+                instances: list,
+                ranges: &list.ranges[ctx.pass],
+            };
+            counts += f(t, &sub);
+        }
+        counts
     }
 }

@@ -4,15 +4,18 @@
 //! |---|---|---|
 //! | `geometry` | [`geometry`] | reference: full meshes, the ground truth |
 //! | `boxtree` | [`boxtree`] | LCV04 |
-//! | `hbt` | — | MNP01 (not yet implemented) |
+//! | `hbt` | [`hbt`] | MNP01 (top level: BTF + reconstruction; no visibility cube-maps yet) |
 //! | `billboard-cloud` | — | GPSS07 (not yet implemented) |
 //! | `zfield` | — | BN12 §5 (not yet implemented) |
 //! | `shadermap` | — | BN12 §6 (not yet implemented) |
-//! | `auto` | — | the LOD chain (not yet implemented) |
+//! | `auto` | [`lod`] | the LOD chain: a technique per distance band, cross-faded |
 
 pub(crate) mod any;
 pub mod boxtree;
+pub(crate) mod common;
 pub mod geometry;
+pub mod hbt;
+pub mod lod;
 
 use crate::RenderError;
 use crate::bake::codec::DecodeError;
@@ -79,8 +82,14 @@ pub struct FrameInput<'a> {
     /// Pixels covered by one metre at one metre's distance in the output image
     /// (`height / (2 tan(fov_y / 2))`).
     pub pixels_per_metre: f32,
+    /// Unit vector towards the sun (world).
+    pub sun_dir: glam::Vec3,
     /// This frame's culled instances (CPU copies per pass and species).
     pub instances: &'a Instances,
+    /// World size of one shadow-map texel in each cascade (metres).
+    pub shadow_texel_m: [f32; crate::frame::CASCADES],
+    /// Eye distance where each cascade ends (metres).
+    pub cascade_far: [f32; crate::frame::CASCADES],
 }
 
 /// What a technique needs to draw one pass.

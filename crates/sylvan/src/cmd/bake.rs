@@ -8,6 +8,7 @@ use std::path::PathBuf;
 use sylvan_render::TechniqueKind;
 use sylvan_render::bake::{self, CachePolicy};
 use sylvan_render::technique::boxtree::BoxTree;
+use sylvan_render::technique::hbt::Hbt;
 
 /// Flags of `sylvan bake`.
 #[derive(clap::Args)]
@@ -61,9 +62,12 @@ pub fn run(args: BakeCmdArgs) -> anyhow::Result<()> {
         }
     };
     let technique = TechniqueKind::parse(&args.technique)?;
+    if technique == TechniqueKind::Hbt {
+        return run_hbt(&args, &plant);
+    }
     if technique != TechniqueKind::BoxTree {
         bail!(
-            "--technique {}: nothing to bake (only boxtree bakes so far) — use --technique boxtree",
+            "--technique {}: nothing to bake (only boxtree and hbt bake so far) — use --technique boxtree",
             args.technique
         );
     }
@@ -108,6 +112,83 @@ pub fn run(args: BakeCmdArgs) -> anyhow::Result<()> {
             summary.images,
             summary.tile,
             summary.planes,
+            summary.image_bytes as f64 / 1e6,
+            if summary.from_cache {
+                "read from cache"
+            } else {
+                "baked"
+            },
+            summary.bake_ms,
+            summary
+                .file
+                .as_ref()
+                .map(|f| format!(" → {f}"))
+                .unwrap_or_default()
+        );
+    }
+    Ok(())
+}
+
+#[derive(Serialize)]
+struct HbtBakeSummary {
+    plant: String,
+    technique: &'static str,
+    from_cache: bool,
+    bake_ms: f64,
+    file: Option<String>,
+    file_bytes: u64,
+    /// GPU texture bytes of the images (all mips).
+    image_bytes: u64,
+    views: usize,
+    lights: usize,
+    images: usize,
+    tile: u32,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    rebaked_because: Option<String>,
+}
+
+/// `sylvan bake --technique hbt`: the plant's top-level BTF (MNP01).
+fn run_hbt(args: &BakeCmdArgs, plant: &sylvan_plant::Plant) -> anyhow::Result<()> {
+    let params = args.bake.hbt()?;
+    let policy = match &args.out {
+        Some(f) => CachePolicy::File(f.clone()),
+        None => args.bake.cache(),
+    };
+    let gpu = sylvan_gpu::Gpu::new()?;
+    let bar = BakeBar::new();
+    let (baked, report) = bake::load_or_bake::<Hbt>(&gpu, plant, &params, &policy, &mut |d, t| {
+        bar.update(&plant.name, d, t)
+    })
+    .with_context(|| format!("baking {}", plant.name))?;
+    bar.finish();
+    let summary = HbtBakeSummary {
+        plant: plant.name.clone(),
+        technique: "hbt",
+        from_cache: report.from_cache,
+        bake_ms: report.ms,
+        file: report.path.as_ref().map(|p| p.display().to_string()),
+        file_bytes: report
+            .path
+            .as_ref()
+            .and_then(|p| std::fs::metadata(p).ok())
+            .map_or(0, |m| m.len()),
+        image_bytes: baked.image_bytes(),
+        views: baked.views(),
+        lights: baked.lights(),
+        images: baked.direct.len() + baked.ambient.len(),
+        tile: baked.tile,
+        rebaked_because: report.stale.clone(),
+    };
+    if args.json {
+        println!("{}", serde_json::to_string(&summary)?);
+    } else {
+        println!(
+            "{}: {} views × {} lights + {} ambient images of {}², {:.2} MB of images, {} in {:.0} ms{}",
+            summary.plant,
+            summary.views,
+            summary.lights,
+            baked.ambient.len(),
+            summary.tile,
             summary.image_bytes as f64 / 1e6,
             if summary.from_cache {
                 "read from cache"

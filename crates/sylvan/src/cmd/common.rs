@@ -5,6 +5,7 @@ use glam::Vec3;
 use std::path::{Path, PathBuf};
 use sylvan_render::bake::CachePolicy;
 use sylvan_render::technique::boxtree::{BoxTreeParams, PlaneLayout};
+use sylvan_render::technique::hbt::{HbtParams, HbtProjection};
 use sylvan_render::{RenderOptions, TechniqueKind};
 use sylvan_scene::{Camera, Scene, Sun};
 
@@ -44,9 +45,9 @@ pub struct BakeArgs {
     /// boxtree: image size per box face in texels (LCV04 uses 64 or 128).
     #[arg(long, default_value_t = BoxTreeParams::default().tile)]
     pub tile: u32,
-    /// boxtree: plane arrangement, `axis` (LCV04 fig. 3; measures better, see BENCHMARKS.md),
-    /// `diagonal` (fig. 6) or `billboard` (the naive one-image baseline).
-    #[arg(long, default_value = "axis")]
+    /// boxtree: plane arrangement, `diagonal` (LCV04 fig. 6; measures better on forests, see
+    /// BENCHMARKS.md), `axis` (fig. 3) or `billboard` (the naive one-image baseline).
+    #[arg(long, default_value = "diagonal")]
     pub planes: String,
     /// boxtree: volume-ratio threshold for boxes to get images (LCV04 §3.2.4).
     #[arg(long, default_value_t = BoxTreeParams::default().volume_threshold)]
@@ -72,6 +73,18 @@ pub struct BakeArgs {
     /// boxtree: fewest leaves a box needs to get images.
     #[arg(long, default_value_t = BoxTreeParams::default().min_leaves)]
     pub min_leaves: u32,
+    /// hbt: view directions of the BTF (MNP01 §3.1): 6, 18, 66 or 258.
+    #[arg(long, default_value_t = 18)]
+    pub hbt_views: usize,
+    /// hbt: light directions of the BTF: 6, 18, 66 or 258.
+    #[arg(long, default_value_t = 18)]
+    pub hbt_lights: usize,
+    /// hbt: billboard size in texels (MNP01 uses 32 or 64).
+    #[arg(long, default_value_t = HbtParams::default().tile)]
+    pub hbt_tile: u32,
+    /// hbt: projection of the blended images, `facing` or `cross` (MNP01 fig. 3.2).
+    #[arg(long, default_value = "facing")]
+    pub hbt_projection: String,
 }
 
 impl BakeArgs {
@@ -92,6 +105,34 @@ impl BakeArgs {
             band: self.band,
             max_boxes: self.max_boxes,
             min_leaves: self.min_leaves,
+            ..Default::default()
+        };
+        p.validate()?;
+        Ok(p)
+    }
+
+    /// The validated hbt parameters.
+    pub fn hbt(&self) -> Result<HbtParams> {
+        let level = |flag: &str, n: usize| -> Result<u32> {
+            sylvan_render::directions::SAMPLE_COUNTS
+                .iter()
+                .position(|&c| c == n)
+                .map(|l| l as u32)
+                .ok_or_else(|| {
+                    anyhow::anyhow!("--{flag} {n}: expected 6, 18, 66 or 258 directions")
+                })
+        };
+        let projection = HbtProjection::parse(&self.hbt_projection).ok_or_else(|| {
+            anyhow::anyhow!(
+                "--hbt-projection {}: expected `facing` or `cross`",
+                self.hbt_projection
+            )
+        })?;
+        let p = HbtParams {
+            view_level: level("hbt-views", self.hbt_views)?,
+            light_level: level("hbt-lights", self.hbt_lights)?,
+            tile: self.hbt_tile,
+            projection,
             ..Default::default()
         };
         p.validate()?;
@@ -206,6 +247,7 @@ impl ViewArgs {
             shadows: !self.no_shadows,
             shadow_resolution: self.shadow_res,
             boxtree: self.bake.boxtree()?,
+            hbt: self.bake.hbt()?,
             cache: self.bake.cache(),
             ..Default::default()
         };

@@ -19,6 +19,8 @@ use sylvan_plant::{Mesh, Plant};
 use wgpu::util::DeviceExt;
 
 const PASSES: usize = 1 + CASCADES;
+/// Shadow-map texels a box texel may cover before the box opens in cascades 1–3 (the 3×3 PCF).
+const SHADOW_FOOTPRINT_TEXELS: f32 = 3.0;
 const MAX_PLANES: usize = 6;
 /// Side of one atlas layer, at most (texels).
 const LAYER_SIZE: u32 = 2048;
@@ -490,14 +492,30 @@ impl Representation for BoxTree {
     }
 
     fn update(&mut self, gpu: &Gpu, input: &FrameInput<'_>) -> Result<(), RenderError> {
-        let view = LodView {
+        let camera = LodView {
             eye: input.eye,
             pixels_per_metre: input.pixels_per_metre / self.params.texel_pixels,
+            footprint: None,
             band: self.params.band,
         };
         self.imp_staging.clear();
         self.res_staging.clear();
         for pass in 0..PASSES {
+            // Cascade c's receivers lie beyond the previous cascade's far distance: trees
+            // nearer than that are shadowed through finer cascades, so here they never open a
+            // box finer than the texels' PCF footprint. The camera and cascade 0 use the
+            // camera's levels.
+            let view = match pass {
+                0 | 1 => camera,
+                c => LodView {
+                    footprint: Some((
+                        input.shadow_texel_m[c - 1] * SHADOW_FOOTPRINT_TEXELS
+                            / self.params.texel_pixels,
+                        input.cascade_far[c - 2],
+                    )),
+                    ..camera
+                },
+            };
             self.imp_sort.clear();
             for list in &mut self.res_lists {
                 list.clear();
@@ -515,6 +533,7 @@ impl Representation for BoxTree {
                         &sp.boxes,
                         &at,
                         &view,
+                        rec.rot[3],
                         &mut self.stack,
                         |b, w, d| {
                             imp.push((

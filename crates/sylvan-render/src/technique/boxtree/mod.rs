@@ -82,11 +82,11 @@ impl Default for BoxTreeParams {
             volume_threshold: 0.005,
             min_leaves: 32,
             max_boxes: 24,
-            layout: PlaneLayout::Axis,
+            layout: PlaneLayout::Diagonal,
             bake_wood: true,
             supersample: 4,
-            texel_pixels: 1.0,
-            band: 0.3,
+            texel_pixels: 0.8,
+            band: 0.5,
         }
     }
 }

@@ -18,9 +18,25 @@ pub struct LodView {
     /// divided by the texel-to-pixel ratio at which a box opens (1: open when a texel would
     /// cover more than a pixel).
     pub pixels_per_metre: f32,
+    /// For a shadow cascade: its texel footprint (metres) and the eye distance below which it
+    /// applies. Boxes nearer than that distance are shadowed through finer cascades, so here
+    /// they need no more detail than the footprint; farther ones keep the camera's level so
+    /// that what the eye sees shadows itself consistently.
+    pub footprint: Option<(f32, f32)>,
     /// Relative width of the transition band beyond the LOD distance (0.3: the box starts
     /// fading at 1.3 × its LOD distance and is fully open at 1 ×).
     pub band: f32,
+}
+
+impl LodView {
+    /// Metres covered by one pixel at `distance`.
+    pub fn footprint_at(&self, distance: f32) -> f32 {
+        let perspective = distance / self.pixels_per_metre.max(1e-6);
+        match self.footprint {
+            Some((f, within)) if distance < within => f.max(perspective),
+            _ => perspective,
+        }
+    }
 }
 
 /// A tree's placement: base, uniform scale, rotation about Y as (cos, sin).
@@ -52,36 +68,41 @@ impl Placement {
 /// Presences this close to 0 or 1 are snapped (see [`traverse`]).
 pub const SNAP: f32 = 0.02;
 
-/// The LOD distance of a box (metres): where one of its texels covers one pixel.
+/// The LOD distance of a box (metres, perspective views): where one of its texels covers one
+/// pixel (LCV04 §4.1).
 pub fn lod_distance(b: &BakedBox, scale: f32, view: &LodView) -> f32 {
     b.metres_per_texel * scale * view.pixels_per_metre
 }
 
-/// Impostor presence of a box at `distance`: 1 beyond the band, 0 at or inside the LOD
-/// distance, smooth in between.
-pub fn impostor_presence(distance: f32, lod: f32, band: f32) -> f32 {
-    let t = ((distance - lod) / (lod * band.max(1e-3))).clamp(0.0, 1.0);
+/// Impostor presence for a pixel footprint `ratio` times the box's texel size: 1 (images only)
+/// at `1 + band` and beyond, 0 (opened) at 1 or below, smooth in between. In a perspective view
+/// the ratio is `distance / lod_distance`.
+pub fn impostor_presence(ratio: f32, band: f32) -> f32 {
+    let t = ((ratio - 1.0) / band.max(1e-3)).clamp(0.0, 1.0);
     t * t * (3.0 - 2.0 * t)
 }
 
 /// Walks one tree's box tree. `impostor(box, presence, distance)` is called for each box drawn
 /// as images, `residual(box, presence)` for each opened box's geometry. Presences along any
-/// root-to-leaf path sum to 1. Uses `stack` as scratch (no allocation once it has grown).
+/// root-to-leaf path sum to `presence` (the tree's own, 1 unless a LOD chain is fading it).
+/// Uses `stack` as scratch (no allocation once it has grown).
 pub fn traverse(
     boxes: &[BakedBox],
     at: &Placement,
     view: &LodView,
+    presence: f32,
     stack: &mut Vec<(u32, f32)>,
     mut impostor: impl FnMut(u32, f32, f32),
     mut residual: impl FnMut(u32, f32),
 ) {
     stack.clear();
-    stack.push((0, 1.0));
+    stack.push((0, presence));
     while let Some((b, w)) = stack.pop() {
         let bx = &boxes[b as usize];
         let centre = (Vec3::from(bx.min) + Vec3::from(bx.max)) * 0.5;
         let d = at.to_world(centre).distance(view.eye);
-        let t = impostor_presence(d, lod_distance(bx, at.scale, view), view.band);
+        let texel = bx.metres_per_texel * at.scale;
+        let t = impostor_presence(view.footprint_at(d) / texel.max(1e-9), view.band);
         // Within 2% of either end of the band, snap: a sliver of presence would cost a whole
         // draw of the other representation for an invisible contribution.
         let t = if t < SNAP {
@@ -131,6 +152,7 @@ mod tests {
         let view = LodView {
             eye: Vec3::new(0.0, 5.0, -distance),
             pixels_per_metre: 500.0,
+            footprint: None,
             band: 0.3,
         };
         let at = Placement {
@@ -144,6 +166,7 @@ mod tests {
             &boxes(),
             &at,
             &view,
+            1.0,
             &mut Vec::new(),
             |b, w, _| imp.push((b, w)),
             |b, w| res.push((b, w)),
@@ -179,13 +202,26 @@ mod tests {
 
     #[test]
     fn presence_is_continuous_in_distance() {
-        let mut prev = impostor_presence(0.0, 100.0, 0.3);
+        let mut prev = impostor_presence(0.0, 0.3);
         for i in 1..2000 {
-            let p = impostor_presence(i as f32 * 0.1, 100.0, 0.3);
+            let p = impostor_presence(i as f32 * 0.001, 0.3);
             assert!((p - prev).abs() < 0.01);
             prev = p;
         }
-        assert_eq!(impostor_presence(100.0, 100.0, 0.3), 0.0);
-        assert_eq!(impostor_presence(130.0, 100.0, 0.3), 1.0);
+        assert_eq!(impostor_presence(1.0, 0.3), 0.0);
+        assert_eq!(impostor_presence(1.3, 0.3), 1.0);
+    }
+
+    #[test]
+    fn footprint_floor_applies_only_nearer_than_the_cascade() {
+        let view = LodView {
+            eye: Vec3::ZERO,
+            pixels_per_metre: 500.0,
+            footprint: Some((0.5, 100.0)),
+            band: 0.3,
+        };
+        assert_eq!(view.footprint_at(1.0), 0.5);
+        assert_eq!(view.footprint_at(200.0), 0.4);
+        assert_eq!(view.footprint_at(1000.0), 2.0);
     }
 }

@@ -66,6 +66,9 @@ struct HbtOut {
     @location(7) @interpolate(flat) rows: vec4<u32>,
     // x: tint seed; y: presence; z: uniform scale.
     @location(8) @interpolate(flat) extra: vec4<f32>,
+    // Mip level: log2 of (a pixel's footprint on the quad / a texel), computed per vertex
+    // (implicit derivatives are wrong along triangle edges on llvmpipe; see boxtree).
+    @location(9) lod: f32,
 };
 
 fn hbt_to_world(p: vec3<f32>, base_scale: vec4<f32>, rot: vec4<f32>) -> vec3<f32> {
@@ -158,6 +161,17 @@ fn hbt_vertex(in: HbtIn, toward_world: vec3<f32>, view_proj: mat4x4<f32>, is_dir
     out.w2 = in.w2;
     out.rows = rows;
     out.extra = vec4<f32>(in.rot.z, in.rot.w, in.base_scale.w, 0.0);
+    // A texel is 2·half/tile metres of the image framing the box (≈ the quad's extent).
+    let texel_m = 2.0 * max(dot(abs(u), h), dot(abs(v), h)) * in.base_scale.w / f32(atlas.tiles.x);
+    var pixel_m = 0.0;
+    if (is_dir) {
+        // Shadow maps: orthographic, one texel per shadow-map texel.
+        let row_x = vec3<f32>(view_proj[0].x, view_proj[1].x, view_proj[2].x);
+        pixel_m = frame.shadow_params.x * 2.0 / max(length(row_x), 1e-6);
+    } else {
+        pixel_m = distance(world, frame.camera.xyz) / max(frame.shadow_params.w, 1.0);
+    }
+    out.lod = max(log2(pixel_m / max(texel_m, 1e-6)), 0.0);
     return out;
 }
 
@@ -173,20 +187,14 @@ fn fetch(tile: u32, uv: vec2<f32>, lod: f32) -> vec4<f32> {
     let per_row = atlas.tiles.y;
     let in_layer = tile % atlas.tiles.z;
     let cell = vec2<f32>(f32(in_layer % per_row), f32(in_layer / per_row));
-    let a = (cell + clamp(uv, vec2<f32>(0.0), vec2<f32>(1.0))) * atlas.params.x;
+    // Keep the bilinear footprint inside this tile at the coarser mip sampled.
+    let half = 0.5 * exp2(ceil(lod)) / f32(atlas.tiles.x);
+    let a = (cell + clamp(uv, vec2<f32>(half), vec2<f32>(1.0 - half))) * atlas.params.x;
     return textureSampleLevel(atlas_color, atlas_sampler, a, i32(tile / atlas.tiles.z), lod);
 }
 
 fn inside(uv: vec2<f32>) -> bool {
     return all(uv >= vec2<f32>(0.0)) && all(uv <= vec2<f32>(1.0));
-}
-
-// Mip level: texels of the first view sample's image per pixel.
-fn image_lod(sp: HbtSpecies, in: HbtOut) -> f32 {
-    let fr = frames[sp.info.w + in.views.x];
-    let metres_per_texel = 2.0 * max(fr.u.w, fr.v.w) / f32(atlas.tiles.x);
-    let footprint = max(length(dpdx(in.model)), length(dpdy(in.model)));
-    return max(log2(max(footprint, 1e-9) / metres_per_texel), 0.0);
 }
 
 @vertex
@@ -197,7 +205,7 @@ fn vs_hbt(in: HbtIn) -> HbtOut {
 @fragment
 fn fs_hbt(in: HbtOut) -> @location(0) vec4<f32> {
     let sp = species_info[in.views.w];
-    let lod = image_lod(sp, in);
+    let lod = in.lod;
     let lights = sp.info.y;
     let views = sp.counts.x;
     var direct = vec4<f32>(0.0);
@@ -246,7 +254,7 @@ fn vs_hbt_shadow(in: HbtIn) -> HbtOut {
 @fragment
 fn fs_hbt_shadow(in: HbtOut) {
     let sp = species_info[in.views.w];
-    let lod = image_lod(sp, in);
+    let lod = in.lod;
     var alpha = 0.0;
     for (var i = 0u; i < 3u; i = i + 1u) {
         let view = in.views[i];

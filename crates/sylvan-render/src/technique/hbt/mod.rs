@@ -102,6 +102,10 @@ pub struct HbtParams {
     pub min_weight: f32,
     /// Facing or cross projection (draw only).
     pub projection: HbtProjection,
+    /// Draw only, a baseline: reconstruct every tree under this fixed world direction (unit,
+    /// towards the light) whatever the sun — a view-only impostor baked under one light, as
+    /// octahedral impostors are. `None` (the default) follows the sun.
+    pub fixed_light: Option<[f32; 3]>,
 }
 
 impl Default for HbtParams {
@@ -114,6 +118,7 @@ impl Default for HbtParams {
             shadow_resolution: 256,
             min_weight: 0.05,
             projection: HbtProjection::Facing,
+            fixed_light: None,
         }
     }
 }
@@ -153,6 +158,13 @@ impl HbtParams {
             return bad(format!(
                 "hbt minimum weight {}: must be at least 0 and below 0.5",
                 self.min_weight
+            ));
+        }
+        if let Some(l) = self.fixed_light
+            && !(l.iter().all(|c| c.is_finite()) && glam::Vec3::from(l).length() > 1e-6)
+        {
+            return bad(format!(
+                "hbt fixed light {l:?}: must be a non-zero direction"
             ));
         }
         Ok(())
