@@ -156,3 +156,28 @@ mod tests {
         );
     }
 }
+
+/// Checks a plant's leaf texture against its data and the device, and uploads it with
+/// coverage-preserving mips; returns the texture and its bytes (all levels).
+pub fn upload_leaf_texture(
+    gpu: &sylvan_gpu::Gpu,
+    label: &str,
+    plant: &sylvan_plant::Plant,
+) -> Result<(wgpu::Texture, u64), crate::RenderError> {
+    let tex = &plant.leaf_texture;
+    if tex.width == 0 || tex.height == 0 || tex.rgba.len() != (tex.width * tex.height * 4) as usize
+    {
+        return Err(crate::RenderError::Plant(format!(
+            "{}: leaf texture size does not match its data",
+            plant.name
+        )));
+    }
+    gpu.check_texture_size("leaf texture", tex.width, tex.height)?;
+    let levels = cutout_mips(Level {
+        width: tex.width,
+        height: tex.height,
+        rgba: tex.rgba.clone(),
+    });
+    let bytes = levels.iter().map(|l| l.rgba.len() as u64).sum();
+    Ok((upload(gpu, label, &levels), bytes))
+}

@@ -16,7 +16,7 @@ pub mod views;
 
 use crate::RenderError;
 use crate::technique::geometry::GpuMesh;
-use crate::texture::{self, Level};
+use crate::texture;
 use bytemuck::{Pod, Zeroable};
 use image::TileImage;
 use std::ops::Range;
@@ -76,24 +76,9 @@ impl PlantBaker {
         }
         gpu.check_texture_size("bake tile", tile * ss, tile * ss)?;
         let device = &gpu.device;
-        let tex = &plant.leaf_texture;
-        if tex.width == 0
-            || tex.height == 0
-            || tex.rgba.len() != (tex.width * tex.height * 4) as usize
-        {
-            return Err(RenderError::Plant(format!(
-                "{}: leaf texture size does not match its data",
-                plant.name
-            )));
-        }
-        gpu.check_texture_size("leaf texture", tex.width, tex.height)?;
-        let levels = texture::cutout_mips(Level {
-            width: tex.width,
-            height: tex.height,
-            rgba: tex.rgba.clone(),
-        });
-        let leaf_view =
-            texture::upload(gpu, "bake_leaf_texture", &levels).create_view(&Default::default());
+        let leaf_view = texture::upload_leaf_texture(gpu, "bake_leaf_texture", plant)?
+            .0
+            .create_view(&Default::default());
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("bake_sampler"),
             mag_filter: wgpu::FilterMode::Linear,

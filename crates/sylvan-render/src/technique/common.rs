@@ -58,13 +58,16 @@ impl Growable {
 /// Side of one atlas layer, at most (texels).
 const LAYER_SIZE: u32 = 2048;
 
-/// Square tiles of one size packed row-major into square layers of a 2D array texture; each
-/// tile keeps its own mip chain (tile sizes are powers of two, so mip `m` of the atlas holds
-/// mip `m` of every tile at the same cell).
+/// Square tiles of one size packed row-major into the layers of a 2D array texture, as close
+/// to square and as tight as the tile count allows; each tile keeps its own mip chain (tile
+/// sizes are powers of two and layers whole numbers of tiles, so mip `m` of the atlas holds mip
+/// `m` of every tile at the same cell).
 pub(crate) struct TileAtlas {
     pub(crate) texture: wgpu::Texture,
-    /// Tiles per row (and per column) of a layer.
+    /// Tiles per row of a layer.
     pub(crate) per_row: u32,
+    /// Rows of tiles per layer.
+    pub(crate) rows: u32,
     /// Tiles per layer.
     pub(crate) per_layer: u32,
     /// GPU bytes (all mips).
@@ -82,13 +85,11 @@ impl TileAtlas {
     ) -> Result<Self, RenderError> {
         let limits = gpu.device.limits();
         let max_row = (LAYER_SIZE.min(limits.max_texture_dimension_2d) / tile).max(1);
-        let per_row = ((tiles.len() as f64).sqrt().ceil() as u32)
-            .max(1)
-            .next_power_of_two()
-            .min(max_row);
-        let layer = per_row * tile;
-        let per_layer = per_row * per_row;
-        let layers = (tiles.len() as u32).div_ceil(per_layer).max(1);
+        let count = (tiles.len() as u32).max(1);
+        let per_row = ((count as f64).sqrt().ceil() as u32).clamp(1, max_row);
+        let rows = count.div_ceil(per_row).min(max_row);
+        let per_layer = per_row * rows;
+        let layers = count.div_ceil(per_layer);
         if layers > limits.max_texture_array_layers {
             return Err(RenderError::Gpu(sylvan_gpu::GpuError::Limit {
                 what: format!("{label} layers"),
@@ -101,8 +102,8 @@ impl TileAtlas {
         let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
             label: Some(label),
             size: wgpu::Extent3d {
-                width: layer,
-                height: layer,
+                width: per_row * tile,
+                height: rows * tile,
                 depth_or_array_layers: layers,
             },
             mip_level_count: mips,
@@ -151,11 +152,15 @@ impl TileAtlas {
             }
         }
         let bytes = (0..mips)
-            .map(|m| ((layer >> m).max(1) as u64).pow(2) * 4 * layers as u64)
+            .map(|m| {
+                let side = (tile >> m).max(1) as u64;
+                (per_row as u64 * side) * (rows as u64 * side) * 4 * layers as u64
+            })
             .sum();
         Ok(Self {
             texture,
             per_row,
+            rows,
             per_layer,
             bytes,
         })

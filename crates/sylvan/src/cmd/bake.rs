@@ -141,6 +141,8 @@ struct HbtBakeSummary {
     image_bytes: u64,
     views: usize,
     lights: usize,
+    /// Main-branch base objects with their own BTF (`--hbt-levels 2`).
+    branch_objects: usize,
     images: usize,
     tile: u32,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -175,7 +177,14 @@ fn run_hbt(args: &BakeCmdArgs, plant: &sylvan_plant::Plant) -> anyhow::Result<()
         image_bytes: baked.image_bytes(),
         views: baked.views(),
         lights: baked.lights(),
-        images: baked.direct.len() + baked.ambient.len(),
+        branch_objects: baked.objects.len(),
+        images: baked.direct.len()
+            + baked.ambient.len()
+            + baked
+                .objects
+                .iter()
+                .map(|o| o.direct.len() + o.ambient.len())
+                .sum::<usize>(),
         tile: baked.tile,
         rebaked_because: report.stale.clone(),
     };
@@ -183,12 +192,14 @@ fn run_hbt(args: &BakeCmdArgs, plant: &sylvan_plant::Plant) -> anyhow::Result<()
         println!("{}", serde_json::to_string(&summary)?);
     } else {
         println!(
-            "{}: {} views × {} lights + {} ambient images of {}², {:.2} MB of images, {} in {:.0} ms{}",
+            "{}: {} views × {} lights + {} ambient images of {}² for the tree, {} branch objects, {} images in all, {:.2} MB of images, {} in {:.0} ms{}",
             summary.plant,
             summary.views,
             summary.lights,
             baked.ambient.len(),
             summary.tile,
+            summary.branch_objects,
+            summary.images,
             summary.image_bytes as f64 / 1e6,
             if summary.from_cache {
                 "read from cache"

@@ -74,14 +74,17 @@ pub struct BakeArgs {
     #[arg(long, default_value_t = BoxTreeParams::default().min_leaves)]
     pub min_leaves: u32,
     /// hbt: view directions of the BTF (MNP01 §3.1): 6, 18, 66 or 258.
-    #[arg(long, default_value_t = 18)]
+    #[arg(long, default_value_t = sylvan_render::directions::SAMPLE_COUNTS[HbtParams::default().view_level as usize])]
     pub hbt_views: usize,
     /// hbt: light directions of the BTF: 6, 18, 66 or 258.
-    #[arg(long, default_value_t = 18)]
+    #[arg(long, default_value_t = sylvan_render::directions::SAMPLE_COUNTS[HbtParams::default().light_level as usize])]
     pub hbt_lights: usize,
     /// hbt: billboard size in texels (MNP01 uses 32 or 64).
     #[arg(long, default_value_t = HbtParams::default().tile)]
     pub hbt_tile: u32,
+    /// hbt: hierarchy levels to bake, 1 (the tree) or 2 (also its main branches; not drawn yet).
+    #[arg(long, default_value_t = HbtParams::default().levels)]
+    pub hbt_levels: u32,
     /// hbt: projection of the blended images, `facing` or `cross` (MNP01 fig. 3.2).
     #[arg(long, default_value = "facing")]
     pub hbt_projection: String,
@@ -129,6 +132,7 @@ impl BakeArgs {
             )
         })?;
         let p = HbtParams {
+            levels: self.hbt_levels,
             view_level: level("hbt-views", self.hbt_views)?,
             light_level: level("hbt-lights", self.hbt_lights)?,
             tile: self.hbt_tile,

@@ -28,7 +28,7 @@ struct Box {
 struct Atlas {
     // x: tile texels; y: tiles per row; z: tiles per layer; w: unused.
     tiles: vec4<u32>,
-    // x: leaf translucency; y: 1 / tiles per row.
+    // x: leaf translucency; y: 1 / tiles per row; z: 1 / rows of tiles per layer.
     params: vec4<f32>,
 };
 
@@ -179,7 +179,7 @@ fn fetch(in: ImpostorOut) -> Texel {
     // packed edge to edge and tightly framed, so the bilinear footprint is also kept inside
     // this tile at the coarser of the two mips sampled, or neighbours would bleed in.
     let half = 0.5 * exp2(ceil(in.lod)) / f32(atlas.tiles.x);
-    let uv = (cell + clamp(in.uv, vec2<f32>(half), vec2<f32>(1.0 - half))) * atlas.params.y;
+    let uv = (cell + clamp(in.uv, vec2<f32>(half), vec2<f32>(1.0 - half))) * atlas.params.yz;
     let layer = i32(tile / atlas.tiles.z);
     var t: Texel;
     t.color = textureSampleLevel(atlas_color, atlas_sampler, uv, layer, in.lod);

@@ -9,6 +9,7 @@ use crate::bake::views::PlaneLayout;
 use crate::frame::{CASCADES, FrameResources};
 use crate::instances::GpuTreeInstance;
 use crate::pipeline::{self, PassKind, PipelineSpec};
+use crate::technique::common::{Growable, TileAtlas};
 use crate::technique::geometry::{LEAF_TRANSLUCENCY, MeshPipelines, SpeciesMeshes};
 use crate::technique::{DrawContext, DrawCounts, FrameInput, Representation};
 use bytemuck::{Pod, Zeroable};
@@ -19,11 +20,10 @@ use sylvan_plant::{Mesh, Plant};
 use wgpu::util::DeviceExt;
 
 const PASSES: usize = 1 + CASCADES;
-/// Shadow-map texels a box texel may cover before the box opens in cascades 1–3 (the 3×3 PCF).
+/// Shadow-map texels a box texel may cover before the box opens in a cascade, for trees whose
+/// shadows fall outside it (the 3×3 PCF footprint).
 const SHADOW_FOOTPRINT_TEXELS: f32 = 3.0;
 const MAX_PLANES: usize = 6;
-/// Side of one atlas layer, at most (texels).
-const LAYER_SIZE: u32 = 2048;
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable, Default)]
@@ -77,52 +77,6 @@ struct Species {
     bake_wood: bool,
     /// Whole wood index range (drawn for every tree when wood is not baked).
     wood_all: Range<u32>,
-}
-
-/// A buffer that grows (doubling) when a frame needs more, and never shrinks.
-struct Growable {
-    buffer: wgpu::Buffer,
-    label: &'static str,
-    reallocations: u32,
-}
-
-impl Growable {
-    fn new(gpu: &Gpu, label: &'static str, bytes: u64) -> Self {
-        Self {
-            buffer: Self::make(gpu, label, bytes.max(256)),
-            label,
-            reallocations: 0,
-        }
-    }
-    fn make(gpu: &Gpu, label: &str, size: u64) -> wgpu::Buffer {
-        gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(label),
-            size,
-            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        })
-    }
-    fn write(&mut self, gpu: &Gpu, data: &[u8]) -> Result<(), RenderError> {
-        let need = data.len() as u64;
-        if need > self.buffer.size() {
-            let limit = gpu.device.limits().max_buffer_size;
-            let size = need.next_power_of_two().min(limit);
-            if need > size {
-                return Err(RenderError::Gpu(sylvan_gpu::GpuError::Limit {
-                    what: format!("{} instance buffer", self.label),
-                    needed: need,
-                    limit,
-                    fix: "lower the LOD quality (texel size) or the tree count".into(),
-                }));
-            }
-            self.buffer = Self::make(gpu, self.label, size);
-            self.reallocations += 1;
-        }
-        if !data.is_empty() {
-            gpu.queue.write_buffer(&self.buffer, 0, data);
-        }
-        Ok(())
-    }
 }
 
 /// The prepared LCV04 technique.
@@ -263,82 +217,38 @@ impl Representation for BoxTree {
                 wood_all: 0..b.wood_indices.len() as u32,
             });
         }
-        // The atlas: tiles packed row-major into square layers, each tile with its own mips.
-        let limits = device.limits();
-        let max_row = (LAYER_SIZE.min(limits.max_texture_dimension_2d) / tile).max(1);
-        // The smallest power-of-two square that holds every tile, else full layers.
-        let per_row = ((tiles.len() as f64).sqrt().ceil() as u32)
-            .max(1)
-            .next_power_of_two()
-            .min(max_row);
-        let layer = per_row * tile;
-        let per_layer = per_row * per_row;
-        let layers = (tiles.len() as u32).div_ceil(per_layer).max(1);
-        if layers > limits.max_texture_array_layers {
-            return Err(RenderError::Gpu(sylvan_gpu::GpuError::Limit {
-                what: "boxtree atlas layers".into(),
-                needed: layers as u64,
-                limit: limits.max_texture_array_layers as u64,
-                fix: "use a smaller tile, a higher volume threshold or fewer boxes".into(),
-            }));
-        }
-        let mips = tile.ilog2() + 1;
-        let make = |label, format| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d {
-                    width: layer,
-                    height: layer,
-                    depth_or_array_layers: layers,
-                },
-                mip_level_count: mips,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-                view_formats: &[],
-            })
+        // The atlas: tiles packed row-major into layers, each tile with its own mips; colour
+        // and normal/depth share the layout.
+        let pick = |f: fn(&crate::bake::image::TileLevel) -> &Vec<u8>| -> Vec<Vec<Vec<u8>>> {
+            tiles
+                .iter()
+                .map(|levels| levels.iter().map(|l| f(l).clone()).collect())
+                .collect()
         };
-        let color = make("boxtree_atlas_color", wgpu::TextureFormat::Rgba8UnormSrgb);
-        let normal = make("boxtree_atlas_normal", wgpu::TextureFormat::Rgba8Unorm);
-        for (t, levels) in tiles.iter().enumerate() {
-            let t = t as u32;
-            let (l, cell) = (t / per_layer, t % per_layer);
-            let (cx, cy) = (cell % per_row, cell / per_row);
-            for (m, level) in levels.iter().enumerate().take(mips as usize) {
-                for (tex, data) in [(&color, &level.color), (&normal, &level.normal)] {
-                    gpu.queue.write_texture(
-                        wgpu::TexelCopyTextureInfo {
-                            texture: tex,
-                            mip_level: m as u32,
-                            origin: wgpu::Origin3d {
-                                x: cx * level.size,
-                                y: cy * level.size,
-                                z: l,
-                            },
-                            aspect: wgpu::TextureAspect::All,
-                        },
-                        data,
-                        wgpu::TexelCopyBufferLayout {
-                            offset: 0,
-                            bytes_per_row: Some(level.size * 4),
-                            rows_per_image: Some(level.size),
-                        },
-                        wgpu::Extent3d {
-                            width: level.size,
-                            height: level.size,
-                            depth_or_array_layers: 1,
-                        },
-                    );
-                }
-            }
-        }
-        let atlas_bytes: u64 = (0..mips)
-            .map(|m| ((layer >> m).max(1) as u64).pow(2) * 4 * 2 * layers as u64)
-            .sum();
+        let (color_data, normal_data) = (pick(|l| &l.color), pick(|l| &l.normal));
+        let color = TileAtlas::upload(
+            gpu,
+            "boxtree_atlas_color",
+            wgpu::TextureFormat::Rgba8UnormSrgb,
+            tile,
+            &color_data.iter().map(Vec::as_slice).collect::<Vec<_>>(),
+        )?;
+        let normal = TileAtlas::upload(
+            gpu,
+            "boxtree_atlas_normal",
+            wgpu::TextureFormat::Rgba8Unorm,
+            tile,
+            &normal_data.iter().map(Vec::as_slice).collect::<Vec<_>>(),
+        )?;
+        let atlas_bytes = color.bytes + normal.bytes;
         let atlas = GpuAtlas {
-            tiles: [tile, per_row, per_layer, 0],
-            params: [LEAF_TRANSLUCENCY, 1.0 / per_row as f32, 0.0, 0.0],
+            tiles: [tile, color.per_row, color.per_layer, 0],
+            params: [
+                LEAF_TRANSLUCENCY,
+                1.0 / color.per_row as f32,
+                1.0 / color.rows as f32,
+                0.0,
+            ],
         };
         let box_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("boxtree_boxes"),
@@ -390,13 +300,7 @@ impl Representation for BoxTree {
                 layout::uniform(4, vf),
             ],
         });
-        let view = |t: &wgpu::Texture| {
-            t.create_view(&wgpu::TextureViewDescriptor {
-                dimension: Some(wgpu::TextureViewDimension::D2Array),
-                ..Default::default()
-            })
-        };
-        let (cv, nv) = (view(&color), view(&normal));
+        let (cv, nv) = (color.view(), normal.view());
         let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("boxtree_bind"),
             layout: &bind_layout,
@@ -501,19 +405,22 @@ impl Representation for BoxTree {
         self.imp_staging.clear();
         self.res_staging.clear();
         for pass in 0..PASSES {
-            // Cascade c's receivers lie beyond the previous cascade's far distance: trees
-            // nearer than that are shadowed through finer cascades, so here they never open a
-            // box finer than the texels' PCF footprint. The camera and cascade 0 use the
-            // camera's levels.
+            // Cascade c shadows receivers between the previous cascade's far distance and its
+            // own (a 10% margin beyond): trees outside that range never open a box finer than
+            // the cascade texels' PCF footprint there. The camera pass uses the camera's levels.
             let view = match pass {
-                0 | 1 => camera,
-                c => LodView {
+                0 => camera.clone(),
+                p => LodView {
                     footprint: Some((
-                        input.shadow_texel_m[c - 1] * SHADOW_FOOTPRINT_TEXELS
+                        input.shadow_texel_m[p - 1] * SHADOW_FOOTPRINT_TEXELS
                             / self.params.texel_pixels,
-                        input.cascade_far[c - 2],
+                        if p == 1 {
+                            0.0
+                        } else {
+                            input.cascade_far[p - 2]
+                        }..input.cascade_far[p - 1] * 1.1,
                     )),
-                    ..camera
+                    ..camera.clone()
                 },
             };
             self.imp_sort.clear();

@@ -10,7 +10,7 @@ use super::bake::BakedBox;
 use glam::Vec3;
 
 /// What the traversal needs from the view.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct LodView {
     /// Eye position (world).
     pub eye: Vec3,
@@ -18,11 +18,11 @@ pub struct LodView {
     /// divided by the texel-to-pixel ratio at which a box opens (1: open when a texel would
     /// cover more than a pixel).
     pub pixels_per_metre: f32,
-    /// For a shadow cascade: its texel footprint (metres) and the eye distance below which it
-    /// applies. Boxes nearer than that distance are shadowed through finer cascades, so here
-    /// they need no more detail than the footprint; farther ones keep the camera's level so
-    /// that what the eye sees shadows itself consistently.
-    pub footprint: Option<(f32, f32)>,
+    /// For a shadow cascade: its texel footprint (metres) and the eye-distance range of the
+    /// receivers it shadows. Boxes outside that range (shadowed through other cascades) need no
+    /// more detail than the footprint; boxes inside keep the camera's level, so that what the
+    /// eye sees shadows itself consistently.
+    pub footprint: Option<(f32, std::ops::Range<f32>)>,
     /// Relative width of the transition band beyond the LOD distance (0.3: the box starts
     /// fading at 1.3 × its LOD distance and is fully open at 1 ×).
     pub band: f32,
@@ -32,8 +32,8 @@ impl LodView {
     /// Metres covered by one pixel at `distance`.
     pub fn footprint_at(&self, distance: f32) -> f32 {
         let perspective = distance / self.pixels_per_metre.max(1e-6);
-        match self.footprint {
-            Some((f, within)) if distance < within => f.max(perspective),
+        match &self.footprint {
+            Some((f, receivers)) if !receivers.contains(&distance) => f.max(perspective),
             _ => perspective,
         }
     }
@@ -213,15 +213,16 @@ mod tests {
     }
 
     #[test]
-    fn footprint_floor_applies_only_nearer_than_the_cascade() {
+    fn footprint_floor_applies_outside_the_cascade_receivers() {
         let view = LodView {
             eye: Vec3::ZERO,
             pixels_per_metre: 500.0,
-            footprint: Some((0.5, 100.0)),
+            footprint: Some((0.5, 100.0..300.0)),
             band: 0.3,
         };
         assert_eq!(view.footprint_at(1.0), 0.5);
         assert_eq!(view.footprint_at(200.0), 0.4);
+        assert_eq!(view.footprint_at(320.0), 0.64);
         assert_eq!(view.footprint_at(1000.0), 2.0);
     }
 }

@@ -15,7 +15,7 @@ use crate::bake::codec::DecodeError;
 use crate::frame::FrameResources;
 use crate::instances::GpuTreeInstance;
 use crate::pipeline::{self, PassKind, PipelineSpec};
-use crate::texture::{self, Level};
+use crate::texture;
 use bytemuck::{Pod, Zeroable};
 use sylvan_gpu::{Gpu, layout};
 use sylvan_plant::{Mesh, Plant};
@@ -175,24 +175,7 @@ impl SpeciesMeshes {
         leaves: &Mesh,
     ) -> Result<Self, RenderError> {
         let device = &gpu.device;
-        let tex = &plant.leaf_texture;
-        if tex.width == 0
-            || tex.height == 0
-            || tex.rgba.len() != (tex.width * tex.height * 4) as usize
-        {
-            return Err(RenderError::Plant(format!(
-                "{}: leaf texture size does not match its data",
-                plant.name
-            )));
-        }
-        gpu.check_texture_size("leaf texture", tex.width, tex.height)?;
-        let levels = texture::cutout_mips(Level {
-            width: tex.width,
-            height: tex.height,
-            rgba: tex.rgba.clone(),
-        });
-        let texture = texture::upload(gpu, "leaf_texture", &levels);
-        let texture_bytes = levels.iter().map(|l| l.rgba.len() as u64).sum();
+        let (texture, texture_bytes) = texture::upload_leaf_texture(gpu, "leaf_texture", plant)?;
         let view = texture.create_view(&Default::default());
         let raw = GpuSpecies {
             bbox_min: [plant.bbox_min[0], plant.bbox_min[1], plant.bbox_min[2], 0.0],

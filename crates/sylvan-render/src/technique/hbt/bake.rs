@@ -10,12 +10,12 @@ use crate::bake::views::PlaneFrame;
 use crate::bake::{BakeRequest, PlantBaker};
 use crate::directions::DirectionSet;
 use crate::technique::geometry::LEAF_TRANSLUCENCY;
-use glam::Vec3;
+use glam::{Mat4, Vec3};
 use sylvan_gpu::Gpu;
-use sylvan_plant::Plant;
+use sylvan_plant::{Instancing, Mesh, Plant};
 
 /// Bumped whenever the payload below or the lighting baked into it changes.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 
 /// Colour of light transmitted through a leaf, relative to its albedo (as the geometry).
 const TRANSMISSION_TINT: Vec3 = Vec3::new(1.1, 1.25, 0.55);
@@ -28,7 +28,25 @@ const BIAS_TEXELS: f32 = 1.5;
 /// RGBA8 (level 0 is `tile²`).
 pub type Mips = Vec<Vec<u8>>;
 
-/// The baked BTF of one plant (the top level of MNP01's hierarchy).
+/// The BTF of one base object of the plant's instancing (MNP01 §3.2: a level below the tree).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ObjectBtf {
+    /// Index into `plant.instancing.objects`.
+    pub object: u32,
+    /// Times the plant's root places it.
+    pub uses: u32,
+    /// The object's bounding box in its own frame.
+    pub bbox_min: [f32; 3],
+    /// Bounding box maximum.
+    pub bbox_max: [f32; 3],
+    /// As [`HbtBaked::direct`].
+    pub direct: Vec<Mips>,
+    /// As [`HbtBaked::ambient`] (sky occlusion estimated inside the object only).
+    pub ambient: Vec<Mips>,
+}
+
+/// The baked BTFs of one plant: the top level of MNP01's hierarchy (the whole tree) and,
+/// when baked with two levels, its main branches.
 #[derive(Debug, Clone, PartialEq)]
 pub struct HbtBaked {
     /// Billboard size in texels.
@@ -47,6 +65,8 @@ pub struct HbtBaked {
     /// `ambient[view]` (sky-facing part) then `ambient[views + view]` (ground-facing part) of
     /// the hemispherical sky term, with sky occlusion, for unit sky and ground colours.
     pub ambient: Vec<Mips>,
+    /// The level below (main branches; empty with one level). Baked, not drawn yet.
+    pub objects: Vec<ObjectBtf>,
 }
 
 impl HbtBaked {
@@ -62,9 +82,14 @@ impl HbtBaked {
 
     /// Bytes of image data (all mips).
     pub fn image_bytes(&self) -> u64 {
+        let objects = self
+            .objects
+            .iter()
+            .flat_map(|o| o.direct.iter().chain(&o.ambient));
         self.direct
             .iter()
             .chain(&self.ambient)
+            .chain(objects)
             .flatten()
             .map(|l| l.len() as u64)
             .sum()
@@ -78,14 +103,13 @@ impl HbtBaked {
         e.u32(self.light_level);
         e.f32s(&self.bbox_min);
         e.f32s(&self.bbox_max);
-        for set in [&self.direct, &self.ambient] {
-            e.u64(set.len() as u64);
-            for mips in set {
-                e.u64(mips.len() as u64);
-                for level in mips {
-                    e.bytes(level);
-                }
-            }
+        encode_images(&mut e, &self.direct, &self.ambient);
+        e.u64(self.objects.len() as u64);
+        for o in &self.objects {
+            e.u32s(&[o.object, o.uses]);
+            e.f32s(&o.bbox_min);
+            e.f32s(&o.bbox_max);
+            encode_images(&mut e, &o.direct, &o.ambient);
         }
         e.buf
     }
@@ -114,34 +138,34 @@ impl HbtBaked {
         let bbox_max = arr3(d.f32s()?)?;
         let counts = crate::directions::SAMPLE_COUNTS;
         let (views, lights) = (counts[view_level as usize], counts[light_level as usize]);
-        let mut sets = Vec::with_capacity(2);
-        for (what, want) in [("direct", views * lights), ("ambient", 2 * views)] {
-            let n = d.u64()?;
-            if n != want as u64 {
-                return Err(bad(format!("{n} {what} images, expected {want}")));
-            }
-            let mut set = Vec::with_capacity(want);
-            for i in 0..want {
-                let nlev = d.u64()?;
-                if nlev != tile.ilog2() as u64 + 1 {
-                    return Err(bad(format!("{what} image {i}: {nlev} mip levels")));
-                }
-                let mut mips = Vec::with_capacity(nlev as usize);
-                for m in 0..nlev as u32 {
-                    let level = d.bytes()?;
-                    let size = (tile >> m).max(1) as usize;
-                    if level.len() != size * size * 4 {
-                        return Err(bad(format!("{what} image {i}: mip {m} has the wrong size")));
-                    }
-                    mips.push(level.to_vec());
-                }
-                set.push(mips);
-            }
-            sets.push(set);
+        let (direct, ambient) = decode_images(&mut d, tile, views, lights)?;
+        let nobjects = d.u64()?;
+        // Each object takes at least its header and images; a huge count fails here.
+        if nobjects > d.remaining() as u64 / 64 {
+            return Err(bad(format!(
+                "{nobjects} objects in {} bytes",
+                d.remaining()
+            )));
+        }
+        let mut objects = Vec::with_capacity(nobjects as usize);
+        for _ in 0..nobjects {
+            let ids = d.u32s()?;
+            let [object, uses] = ids[..] else {
+                return Err(bad("object header is not 2 integers".into()));
+            };
+            let bbox_min = arr3(d.f32s()?)?;
+            let bbox_max = arr3(d.f32s()?)?;
+            let (direct, ambient) = decode_images(&mut d, tile, views, lights)?;
+            objects.push(ObjectBtf {
+                object,
+                uses,
+                bbox_min,
+                bbox_max,
+                direct,
+                ambient,
+            });
         }
         d.finish()?;
-        let ambient = sets.pop().unwrap_or_default();
-        let direct = sets.pop().unwrap_or_default();
         Ok(Self {
             tile,
             view_level,
@@ -150,8 +174,60 @@ impl HbtBaked {
             bbox_max,
             direct,
             ambient,
+            objects,
         })
     }
+}
+
+/// Writes one object's direct and ambient image sets.
+fn encode_images(e: &mut Encoder, direct: &[Mips], ambient: &[Mips]) {
+    for set in [direct, ambient] {
+        e.u64(set.len() as u64);
+        for mips in set {
+            e.u64(mips.len() as u64);
+            for level in mips {
+                e.bytes(level);
+            }
+        }
+    }
+}
+
+/// Reads one object's direct and ambient image sets, checking counts and sizes.
+fn decode_images(
+    d: &mut Decoder<'_>,
+    tile: u32,
+    views: usize,
+    lights: usize,
+) -> Result<(Vec<Mips>, Vec<Mips>), DecodeError> {
+    let bad = |m: String| DecodeError(m);
+    let mut sets = Vec::with_capacity(2);
+    for (what, want) in [("direct", views * lights), ("ambient", 2 * views)] {
+        let n = d.u64()?;
+        if n != want as u64 {
+            return Err(bad(format!("{n} {what} images, expected {want}")));
+        }
+        let mut set = Vec::with_capacity(want);
+        for i in 0..want {
+            let nlev = d.u64()?;
+            if nlev != tile.ilog2() as u64 + 1 {
+                return Err(bad(format!("{what} image {i}: {nlev} mip levels")));
+            }
+            let mut mips = Vec::with_capacity(nlev as usize);
+            for m in 0..nlev as u32 {
+                let level = d.bytes()?;
+                let size = (tile >> m).max(1) as usize;
+                if level.len() != size * size * 4 {
+                    return Err(bad(format!("{what} image {i}: mip {m} has the wrong size")));
+                }
+                mips.push(level.to_vec());
+            }
+            set.push(mips);
+        }
+        sets.push(set);
+    }
+    let ambient = sets.pop().unwrap_or_default();
+    let direct = sets.pop().unwrap_or_default();
+    Ok((direct, ambient))
 }
 
 /// The content hash of everything a bake depends on (not the draw-only parameters).
@@ -165,6 +241,7 @@ pub fn input_hash(plant: &Plant, p: &HbtParams) -> u64 {
             p.tile,
             p.supersample,
             p.shadow_resolution,
+            p.levels,
         ])
         .f32s(&[LEAF_TRANSLUCENCY]);
     for mesh in [&plant.wood, &plant.leaves] {
@@ -387,27 +464,25 @@ fn light_view(
     (direct, sky, ground)
 }
 
-/// Bakes `plant`'s top-level BTF. `progress(done, total)` counts rasterised views, light maps
-/// and lit views.
-pub fn bake(
+/// The direct and ambient images of one object (a plant, or a base object wrapped as one):
+/// `direct[view · lights + light]`, then `ambient` (sky-facing parts, then ground-facing).
+/// `progress(done)` counts `2·views + lights` units.
+fn bake_btf(
     gpu: &Gpu,
     plant: &Plant,
     p: &HbtParams,
-    mut progress: impl FnMut(usize, usize),
-) -> Result<HbtBaked, RenderError> {
-    p.validate()?;
-    let option = |e: crate::directions::DirectionError| RenderError::Option(e.to_string());
-    let views = DirectionSet::new(p.view_level).map_err(option)?;
-    let lights = DirectionSet::new(p.light_level).map_err(option)?;
+    views: &DirectionSet,
+    lights: &DirectionSet,
+    progress: &mut dyn FnMut(usize),
+) -> Result<(Vec<Mips>, Vec<Mips>), RenderError> {
     let (min, max) = (Vec3::from(plant.bbox_min), Vec3::from(plant.bbox_max));
     let whole = |frame: PlaneFrame| BakeRequest {
         frame,
         side: 1.0,
-        leaves: vec![0..plant.leaves.indices.len() as u32],
-        wood: vec![0..plant.wood.indices.len() as u32],
+        leaves: std::iter::once(0..plant.leaves.indices.len() as u32).collect(),
+        wood: std::iter::once(0..plant.wood.indices.len() as u32).collect(),
     };
     let (nv, nl) = (views.len(), lights.len());
-    let total = 2 * nv + nl;
     let view_frames: Vec<PlaneFrame> = views
         .directions()
         .iter()
@@ -417,7 +492,7 @@ pub fn bake(
     let gbuffers = PlantBaker::new(gpu, plant, hi, 1)?.bake(
         gpu,
         &view_frames.iter().map(|&f| whole(f)).collect::<Vec<_>>(),
-        |d| progress(d, total),
+        &mut *progress,
     )?;
     let light_frames: Vec<PlaneFrame> = lights
         .directions()
@@ -427,7 +502,7 @@ pub fn bake(
     let depth_maps = PlantBaker::new(gpu, plant, p.shadow_resolution, 1)?.bake(
         gpu,
         &light_frames.iter().map(|&f| whole(f)).collect::<Vec<_>>(),
-        |d| progress(nv + d, total),
+        |d| progress(nv + d),
     )?;
     let light_maps: Vec<(Vec3, LightMap)> = lights
         .directions()
@@ -460,9 +535,9 @@ pub fn bake(
             .flat_map(|h| h.join().expect("lighting thread panicked"))
             .collect()
     });
-    progress(total, total);
+    progress(2 * nv + nl);
     let mut direct = Vec::with_capacity(nv * nl);
-    let mut sky = Vec::with_capacity(nv);
+    let mut sky = Vec::with_capacity(2 * nv);
     let mut ground = Vec::with_capacity(nv);
     for (d, s, g) in lit {
         direct.extend(d);
@@ -470,6 +545,115 @@ pub fn bake(
         ground.push(g);
     }
     sky.extend(ground);
+    Ok((direct, sky))
+}
+
+/// The base objects one level below the plant (MNP01 §3.2, §7: the main branches): distinct
+/// objects the root instances directly, leaves excluded, in order of first use, with how many
+/// times the root places each.
+pub fn main_branches(plant: &Plant) -> Vec<(u32, u32)> {
+    let inst = &plant.instancing;
+    let Some(root) = inst.objects.get(inst.root as usize) else {
+        return Vec::new();
+    };
+    let mut out: Vec<(u32, u32)> = Vec::new();
+    for i in &root.instances {
+        let level = inst.objects.get(i.object as usize).map_or(0, |o| o.level);
+        if level == 0 || i.object == inst.root {
+            continue;
+        }
+        match out.iter_mut().find(|(o, _)| *o == i.object) {
+            Some(e) => e.1 += 1,
+            None => out.push((i.object, 1)),
+        }
+    }
+    out
+}
+
+/// Base object `object` of `plant` expanded into a plant of its own (its frame, the plant's
+/// leaf texture), ready for the baker.
+pub fn object_plant(plant: &Plant, object: u32) -> Plant {
+    fn expand(inst: &Instancing, o: u32, m: &Mat4, wood: &mut Mesh, leaves: &mut Mesh, depth: u32) {
+        let Some(obj) = inst.objects.get(o as usize) else {
+            return;
+        };
+        if depth > 256 {
+            return;
+        }
+        wood.append_transformed(&obj.wood, m);
+        leaves.append_transformed(&obj.leaves, m);
+        for i in &obj.instances {
+            expand(inst, i.object, &(*m * i.transform), wood, leaves, depth + 1);
+        }
+    }
+    let (mut wood, mut leaves) = (Mesh::default(), Mesh::default());
+    expand(
+        &plant.instancing,
+        object,
+        &Mat4::IDENTITY,
+        &mut wood,
+        &mut leaves,
+        0,
+    );
+    let (mut min, mut max) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    for p in wood.positions.iter().chain(&leaves.positions) {
+        min = min.min(Vec3::from(*p));
+        max = max.max(Vec3::from(*p));
+    }
+    if min.x > max.x {
+        (min, max) = (Vec3::ZERO, Vec3::ZERO);
+    }
+    Plant {
+        name: format!("{} object {object}", plant.name),
+        leaf_count: leaves.indices.len() / 6,
+        wood,
+        leaves,
+        leaf_texture: plant.leaf_texture.clone(),
+        bbox_min: min.to_array(),
+        bbox_max: max.to_array(),
+        hierarchy: Default::default(),
+        instancing: Default::default(),
+        internodes: 0,
+    }
+}
+
+/// Bakes `plant`'s BTF (the top level) and, with `p.levels == 2`, the BTF of each main branch
+/// base object ([`main_branches`]). `progress(done, total)` counts rasterised views, light
+/// maps and lit views.
+pub fn bake(
+    gpu: &Gpu,
+    plant: &Plant,
+    p: &HbtParams,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<HbtBaked, RenderError> {
+    p.validate()?;
+    let option = |e: crate::directions::DirectionError| RenderError::Option(e.to_string());
+    let views = DirectionSet::new(p.view_level).map_err(option)?;
+    let lights = DirectionSet::new(p.light_level).map_err(option)?;
+    let branches = if p.levels >= 2 {
+        main_branches(plant)
+    } else {
+        Vec::new()
+    };
+    let per_object = 2 * views.len() + lights.len();
+    let total = per_object * (1 + branches.len());
+    let (direct, ambient) = bake_btf(gpu, plant, p, &views, &lights, &mut |d| progress(d, total))?;
+    let mut objects = Vec::with_capacity(branches.len());
+    for (k, &(object, uses)) in branches.iter().enumerate() {
+        let sub = object_plant(plant, object);
+        let done = per_object * (1 + k);
+        let (direct, ambient) = bake_btf(gpu, &sub, p, &views, &lights, &mut |d| {
+            progress(done + d, total)
+        })?;
+        objects.push(ObjectBtf {
+            object,
+            uses,
+            bbox_min: sub.bbox_min,
+            bbox_max: sub.bbox_max,
+            direct,
+            ambient,
+        });
+    }
     Ok(HbtBaked {
         tile: p.tile,
         view_level: p.view_level,
@@ -477,7 +661,8 @@ pub fn bake(
         bbox_min: plant.bbox_min,
         bbox_max: plant.bbox_max,
         direct,
-        ambient: sky,
+        ambient,
+        objects,
     })
 }
 
@@ -524,12 +709,23 @@ mod tests {
             bbox_max: [1.0; 3],
             direct: vec![mips(8); 36],
             ambient: vec![mips(8); 12],
+            objects: vec![ObjectBtf {
+                object: 3,
+                uses: 2,
+                bbox_min: [0.0; 3],
+                bbox_max: [1.0; 3],
+                direct: vec![mips(8); 36],
+                ambient: vec![mips(8); 12],
+            }],
         };
         let bytes = b.encode();
         assert_eq!(HbtBaked::decode(&bytes).unwrap(), b);
         assert!(HbtBaked::decode(&bytes[..bytes.len() - 1]).is_err());
         let mut wrong = b.clone();
         wrong.direct.pop();
+        assert!(HbtBaked::decode(&wrong.encode()).is_err());
+        let mut wrong = b.clone();
+        wrong.objects[0].ambient.pop();
         assert!(HbtBaked::decode(&wrong.encode()).is_err());
     }
 }

@@ -5,7 +5,7 @@ use super::bake::{self as hb, HbtBaked};
 use super::{HbtParams, HbtProjection};
 use crate::RenderError;
 use crate::bake::codec::DecodeError;
-use crate::directions::DirectionSet;
+use crate::directions::{DirectionLut, DirectionSet};
 use crate::frame::{CASCADES, FrameResources};
 use crate::pipeline::{self, PassKind, PipelineSpec};
 use crate::technique::common::{Growable, TileAtlas};
@@ -72,8 +72,10 @@ impl GpuHbtInstance {
 /// The prepared MNP01 technique (top level).
 pub struct Hbt {
     params: HbtParams,
-    views: DirectionSet,
-    lights: DirectionSet,
+    /// MNP01 §4.1's direction → 3 samples tables (same results as `DirectionSet::nearest3`,
+    /// ~3× faster on the CPU).
+    views: DirectionLut,
+    lights: DirectionLut,
     /// Model-space bounding-box centre per species.
     centres: Vec<Vec3>,
     pipeline: wgpu::RenderPipeline,
@@ -205,7 +207,12 @@ impl Representation for Hbt {
                 atlas.per_layer,
                 (params.projection == HbtProjection::Cross) as u32,
             ],
-            params: [1.0 / atlas.per_row as f32, 0.0, 0.0, 0.0],
+            params: [
+                1.0 / atlas.per_row as f32,
+                1.0 / atlas.rows as f32,
+                0.0,
+                0.0,
+            ],
         };
         let storage = |label, contents: &[u8]| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -331,8 +338,8 @@ impl Representation for Hbt {
             atlas.bytes + species_buffer.size() + frame_buffer.size() + atlas_buffer.size();
         Ok(Self {
             params: params.clone(),
-            views,
-            lights,
+            views: DirectionLut::new(&views, DirectionLut::DEFAULT_RESOLUTION).map_err(option)?,
+            lights: DirectionLut::new(&lights, DirectionLut::DEFAULT_RESOLUTION).map_err(option)?,
             centres,
             pipeline: main,
             shadow_pipeline: shadow,
@@ -369,8 +376,8 @@ impl Representation for Hbt {
                     let eye = input.eye - world_centre;
                     if pass == 0 {
                         // MNP01 §4.1: 3 view × 3 light samples, products of barycentrics.
-                        let (v, vw) = self.views.nearest3(to_model_dir(eye, c, sn));
-                        let (l, lw) = self.lights.nearest3(to_model_dir(light, c, sn));
+                        let (v, vw) = self.views.lookup(to_model_dir(eye, c, sn));
+                        let (l, lw) = self.lights.lookup(to_model_dir(light, c, sn));
                         let w = hb::reconstruction_weights(vw, lw, self.params.min_weight);
                         inst.views[..3].copy_from_slice(&v);
                         inst.lights[..3].copy_from_slice(&l);
@@ -378,10 +385,10 @@ impl Representation for Hbt {
                     } else {
                         // Shadow casters are seen from the sun: only coverage matters, so the
                         // view weights go in the first column.
-                        let (v, vw) = self.views.nearest3(to_model_dir(sun, c, sn));
+                        let (v, vw) = self.views.lookup(to_model_dir(sun, c, sn));
                         inst.views[..3].copy_from_slice(&v);
-                        for i in 0..3 {
-                            inst.weights[3 * i] = vw[i];
+                        for (i, w) in vw.iter().enumerate() {
+                            inst.weights[3 * i] = *w;
                         }
                     }
                     self.sort.push((eye.length_squared(), inst));

@@ -26,7 +26,7 @@ struct SampleFrame {
 struct HbtAtlas {
     // x: tile texels; y: tiles per row; z: tiles per layer; w: 1 for cross projection.
     tiles: vec4<u32>,
-    // x: 1 / tiles per row; y: finest mip's texels per metre scale (unused); z, w: unused.
+    // x: 1 / tiles per row; y: 1 / rows of tiles; z, w: unused.
     params: vec4<f32>,
 };
 
@@ -189,7 +189,7 @@ fn fetch(tile: u32, uv: vec2<f32>, lod: f32) -> vec4<f32> {
     let cell = vec2<f32>(f32(in_layer % per_row), f32(in_layer / per_row));
     // Keep the bilinear footprint inside this tile at the coarser mip sampled.
     let half = 0.5 * exp2(ceil(lod)) / f32(atlas.tiles.x);
-    let a = (cell + clamp(uv, vec2<f32>(half), vec2<f32>(1.0 - half))) * atlas.params.x;
+    let a = (cell + clamp(uv, vec2<f32>(half), vec2<f32>(1.0 - half))) * atlas.params.xy;
     return textureSampleLevel(atlas_color, atlas_sampler, a, i32(tile / atlas.tiles.z), lod);
 }
 
@@ -218,13 +218,19 @@ fn fs_hbt(in: HbtOut) -> @location(0) vec4<f32> {
         if (a <= 0.0 || !inside(uv)) {
             continue;
         }
+        // Every image of a view sample has the same coverage: where the sky image is empty,
+        // the others are too (most of the quad), so they are not fetched.
+        let sky_texel = fetch(sp.info.z + view, uv, lod);
+        if (sky_texel.a < 0.002) {
+            continue;
+        }
         for (var j = 0u; j < 3u; j = j + 1u) {
             let w = pair_weight(in, 3u * i + j);
             if (w > 0.0) {
                 direct = direct + w * fetch(sp.info.x + view * lights + in.lights[j], uv, lod);
             }
         }
-        sky = sky + a * fetch(sp.info.z + view, uv, lod).rgb;
+        sky = sky + a * sky_texel.rgb;
         ground = ground + a * fetch(sp.info.z + views + view, uv, lod).rgb;
     }
     let alpha = min(direct.a * in.extra.y, 1.0);
@@ -264,7 +270,8 @@ fn fs_hbt_shadow(in: HbtOut) {
             alpha = alpha + a * fetch(sp.info.z + view, uv, lod).a;
         }
     }
-    if (alpha * in.extra.y <= hash13(vec3<f32>(in.pos.xy, 3.0))) {
+    // The tree's tint seed decorrelates the thresholds of overlapping trees.
+    if (alpha * in.extra.y <= hash13(vec3<f32>(in.pos.xy, 3.0 + 97.0 * in.extra.x))) {
         discard;
     }
 }

@@ -1,5 +1,6 @@
 //! Technique `hbt`: MNP01 — Meyer, Neyret, Poulin, *Interactive Rendering of Trees with
-//! Shading and Shadows*, EGWR 2001. A first increment: the top level of the hierarchy only.
+//! Shading and Shadows*, EGWR 2001. A first increment: the top level of the hierarchy is
+//! baked and drawn; the level below (main branches) can be baked, not yet drawn.
 //!
 //! Implements:
 //! - §3.1 the **bidirectional texture function** of the whole tree (one base object): one
@@ -13,9 +14,14 @@
 //!   with the reference's model (Lambert + leaf transmission) times its visibility from that
 //!   light (5×5 PCF in the light's depth map: soft self-shadows), then box-filtered down to the
 //!   tile and mip-mapped;
+//! - §3.2/§7 the **level below**: with [`HbtParams::levels`] = 2, the same BTF for each distinct
+//!   base object the plant's root places (`plant.instancing`: the main branches,
+//!   [`bake::main_branches`]), each expanded from its instances and baked in its own frame
+//!   ([`bake::ObjectBtf`]);
 //! - §4.1 and the appendix, **reconstruction**: per tree and frame, the 3 view samples and
 //!   3 light samples enclosing the (model-space) eye and sun directions with their barycentric
-//!   weights ([`crate::directions::DirectionSet::nearest3`] on the CPU, per instance); the 9
+//!   weights (MNP01's precomputed table, [`crate::directions::DirectionLut::lookup`], on the
+//!   CPU per instance: ~3× faster than descending the subdivision, same result); the 9
 //!   products, those below [`HbtParams::min_weight`] dropped and the rest renormalised
 //!   ([`reconstruction_weights`]); 9 weighted fetches summed in one fragment (the
 //!   order-independent weighted sum the appendix builds with "darken then add", done in one
@@ -24,9 +30,12 @@
 //!   projection (§4.1, fig. 3.2), selectable ([`HbtProjection`]).
 //!
 //! Deviations, plainly:
-//! - **Only the top level.** The tree is one BTF; the lower levels (main branches through
-//!   `plant.instancing`, small branches), LOD by projected size (§4, §5) and baking higher
-//!   levels from lower ones (§6.1) are not implemented yet.
+//! - **Only the top level is drawn.** Main-branch BTFs are baked (opt-in) but not used yet;
+//!   the small-branch level, LOD by projected size (opening a tree into its branches, §4, §5),
+//!   back-to-front drawing of opened objects, and baking higher levels by rendering the lower
+//!   levels' BTFs (§6.1, for consistency between levels) are not implemented. Each level is
+//!   baked from geometry instead. A branch's sky occlusion is estimated inside the branch only
+//!   (its placement in the tree varies per instance).
 //! - **No visibility cube-maps (§3.3, §4.2, §6.2).** Shadows received from the rest of the scene
 //!   come from the renderer's cascaded shadow maps, sampled once per fragment at the billboard
 //!   point moved towards the sun by the tree's bounding radius (so the tree does not shadow
@@ -46,7 +55,9 @@
 //! Cost: bake = V + L rasterisations plus a CPU lighting pass of V·L·(tile·ss)² samples; per
 //! frame, 2 direction look-ups per tree in view and 1 per tree per cascade (CPU), one instanced
 //! draw per pass, up to 9 + 6 texture fetches per fragment. Memory: (V·L + 2V) tiles of
-//! `tile²` RGBA8 with mips.
+//! `tile²` RGBA8 with mips, per species, in one `texture_2d_array` atlas (66 × 18 at 32 px, the
+//! default: 7.2 MB per plant; 18 × 18: 1.97 MB; main branches add that per distinct branch
+//! object).
 
 pub mod bake;
 mod draw;
@@ -88,6 +99,9 @@ impl HbtProjection {
 /// Bake and draw parameters of `hbt`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct HbtParams {
+    /// Levels of the hierarchy baked: 1, the tree; 2, also its main branches (baked and stored,
+    /// not drawn yet).
+    pub levels: u32,
     /// View-direction set: subdivision level 0..=3 (6, 18, 66 or 258 samples).
     pub view_level: u32,
     /// Light-direction set: subdivision level 0..=3.
@@ -111,7 +125,10 @@ pub struct HbtParams {
 impl Default for HbtParams {
     fn default() -> Self {
         Self {
-            view_level: 1,
+            levels: 1,
+            // 66 views: with 18 (45° apart) the blend of 3 differing silhouettes blurs trees
+            // and their shadows (FLIP on the default view 0.107 with 18, 0.082 with 66).
+            view_level: 2,
             light_level: 1,
             tile: 32,
             supersample: 4,
@@ -127,6 +144,12 @@ impl HbtParams {
     /// Checks every value; the error names the option and the valid range.
     pub fn validate(&self) -> Result<(), RenderError> {
         let bad = |m: String| Err(RenderError::Option(m));
+        if !(1..=2).contains(&self.levels) {
+            return bad(format!(
+                "hbt levels {}: must be 1 (the tree) or 2 (tree and main branches)",
+                self.levels
+            ));
+        }
         for (what, level) in [("view", self.view_level), ("light", self.light_level)] {
             if level > MAX_LEVEL {
                 return bad(format!(
