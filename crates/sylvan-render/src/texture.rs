@@ -116,6 +116,31 @@ pub fn upload(gpu: &sylvan_gpu::Gpu, label: &str, levels: &[Level]) -> wgpu::Tex
     texture
 }
 
+/// Checks a plant's leaf texture against its data and the device, and uploads it with
+/// coverage-preserving mips; returns the texture and its bytes (all levels).
+pub fn upload_leaf_texture(
+    gpu: &sylvan_gpu::Gpu,
+    label: &str,
+    plant: &sylvan_plant::Plant,
+) -> Result<(wgpu::Texture, u64), crate::RenderError> {
+    let tex = &plant.leaf_texture;
+    if tex.width == 0 || tex.height == 0 || tex.rgba.len() != (tex.width * tex.height * 4) as usize
+    {
+        return Err(crate::RenderError::Plant(format!(
+            "{}: leaf texture size does not match its data",
+            plant.name
+        )));
+    }
+    gpu.check_texture_size("leaf texture", tex.width, tex.height)?;
+    let levels = cutout_mips(Level {
+        width: tex.width,
+        height: tex.height,
+        rgba: tex.rgba.clone(),
+    });
+    let bytes = levels.iter().map(|l| l.rgba.len() as u64).sum();
+    Ok((upload(gpu, label, &levels), bytes))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -155,29 +180,4 @@ mod tests {
                 .all(|p| p[1] >= 110)
         );
     }
-}
-
-/// Checks a plant's leaf texture against its data and the device, and uploads it with
-/// coverage-preserving mips; returns the texture and its bytes (all levels).
-pub fn upload_leaf_texture(
-    gpu: &sylvan_gpu::Gpu,
-    label: &str,
-    plant: &sylvan_plant::Plant,
-) -> Result<(wgpu::Texture, u64), crate::RenderError> {
-    let tex = &plant.leaf_texture;
-    if tex.width == 0 || tex.height == 0 || tex.rgba.len() != (tex.width * tex.height * 4) as usize
-    {
-        return Err(crate::RenderError::Plant(format!(
-            "{}: leaf texture size does not match its data",
-            plant.name
-        )));
-    }
-    gpu.check_texture_size("leaf texture", tex.width, tex.height)?;
-    let levels = cutout_mips(Level {
-        width: tex.width,
-        height: tex.height,
-        rgba: tex.rgba.clone(),
-    });
-    let bytes = levels.iter().map(|l| l.rgba.len() as u64).sum();
-    Ok((upload(gpu, label, &levels), bytes))
 }
