@@ -167,3 +167,15 @@ fn debug_tint(color: vec3<f32>, world: vec3<f32>, technique: i32) -> vec3<f32> {
     }
     return color;
 }
+
+// `debug_tint` for a level-of-detail technique: in the "technique" view, level 0 (coarsest)
+// is the technique's colour and each finer level is paler.
+fn debug_tint_lod(color: vec3<f32>, world: vec3<f32>, technique: i32, level: u32) -> vec3<f32> {
+    let mode = u32(frame.shadow_params.z + 0.5);
+    if (mode == DEBUG_TECHNIQUE) {
+        let luma = dot(color, vec3<f32>(0.2126, 0.7152, 0.0722));
+        let c = mix(technique_color(technique), vec3<f32>(1.0), min(f32(level) * 0.3, 0.75));
+        return c * (0.15 + 1.5 * luma);
+    }
+    return debug_tint(color, world, technique);
+}

@@ -20,8 +20,9 @@ struct Box {
     // The plant's bounding box (for the crown occlusion term, as in the geometry).
     plant_min: vec4<f32>,
     plant_max: vec4<f32>,
-    // x: first tile; y: images per plane (1 or 2); z: planes; w: 1 for a billboard (one plane
-    // turned about the vertical axis towards the viewer).
+    // x: first tile; y: images per plane (1 or 2); z: planes; w: bit 0 set for a billboard
+    // (one plane turned about the vertical axis towards the viewer), bits 1…: the box's depth
+    // in the box tree (for the debug view).
     info: vec4<u32>,
 };
 
@@ -100,7 +101,7 @@ fn impostor_vertex(in: ImpostorIn, toward_world: vec3<f32>, view_proj: mat4x4<f3
     let d = normalize(to_model_dir(toward, in.rot));
     var w = 1.0;
     var c = 1.0;
-    if (b.info.w == 1u) {
+    if ((b.info.w & 1u) == 1u) {
         // Billboard: turn the plane about Y to face the viewer.
         let h = vec2<f32>(d.x, d.z);
         let f = select(vec3<f32>(0.0, 0.0, 1.0), normalize(vec3<f32>(h.x, 0.0, h.y)), dot(h, h) > 1e-8);
@@ -115,8 +116,9 @@ fn impostor_vertex(in: ImpostorIn, toward_world: vec3<f32>, view_proj: mat4x4<f3
         c = dot(d, p.f.xyz);
         w = c * c / max(total, 1e-6);
     }
-    // A plane seen (almost) edge-on contributes nothing: skip its fragments entirely.
-    if (w * in.rot.w < 0.01) {
+    // A plane seen (almost) edge-on contributes nothing: skip its fragments entirely. Shadow
+    // maps (3×3 PCF, stochastic coverage) skip planes carrying under a tenth of the box.
+    if (w * in.rot.w < select(0.01, 0.1, is_dir)) {
         out.pos = vec4<f32>(0.0, 0.0, -2.0, 1.0);
         return out;
     }
@@ -213,7 +215,7 @@ fn fs_impostor(in: ImpostorOut) -> @location(0) vec4<f32> {
     let p = b.planes[in.ids.y];
     var n = normalize(t.normal_depth.xyz * 2.0 - 1.0);
     let f = in.axis;
-    if (b.info.w == 1u) {
+    if ((b.info.w & 1u) == 1u) {
         // Billboard: the image was baked from +Z; turn its normals with the quad.
         n = vec3<f32>(n.x * f.z + n.z * f.x, n.y, -n.x * f.x + n.z * f.z);
     }
@@ -238,8 +240,9 @@ fn fs_impostor(in: ImpostorOut) -> @location(0) vec4<f32> {
     let ambient = albedo * sky_light(nw) * crown_occlusion(model, b.plant_min.xyz, b.plant_max.xyz);
     // Fog on premultiplied colour: the fog colour enters with this texel's coverage.
     let fogged = apply_fog_premultiplied(direct + ambient, alpha, world);
-    // Debug view "technique": impostors in the boxtree colour (opened geometry stays geometry's).
-    let lit = debug_tint(fogged / alpha, world, 1) * alpha;
+    // Debug view "technique": impostors in the boxtree colour, paler for finer boxes (opened
+    // geometry stays geometry's colour).
+    let lit = debug_tint_lod(fogged / alpha, world, 1, b.info.w >> 1u) * alpha;
     return vec4<f32>(lit * (a / alpha), a);
 }
 

@@ -114,6 +114,16 @@ impl BoxTree {
     }
 }
 
+/// Depth of box `i` in its box tree (the root is 0).
+fn depth(boxes: &[BakedBox], mut i: usize) -> u32 {
+    let mut d = 0;
+    while let Some(p) = boxes.get(i).map(|b| b.parent).filter(|&p| p != u32::MAX) {
+        i = p as usize;
+        d += 1;
+    }
+    d
+}
+
 fn reordered(mesh: &Mesh, indices: &[u32]) -> Mesh {
     Mesh {
         indices: indices.to_vec(),
@@ -202,7 +212,7 @@ impl Representation for BoxTree {
                         tiles.len() as u32 + i as u32 * images,
                         layout.sides(),
                         planes_per_box,
-                        (layout == PlaneLayout::Billboard) as u32,
+                        (layout == PlaneLayout::Billboard) as u32 | depth(&b.boxes, i) << 1,
                     ],
                 });
             }

@@ -211,10 +211,12 @@ fn fs_hbt(in: HbtOut) -> @location(0) vec4<f32> {
     var direct = vec4<f32>(0.0);
     var sky = vec3<f32>(0.0);
     var ground = vec3<f32>(0.0);
+    var rows_weight = 0.0;
     for (var i = in.rows.x; i < in.rows.y; i = i + 1u) {
         let view = in.views[i];
         let uv = sample_uv(sp, view, in.model);
         let a = pair_weight(in, 3u * i) + pair_weight(in, 3u * i + 1u) + pair_weight(in, 3u * i + 2u);
+        rows_weight = rows_weight + a;
         if (a <= 0.0 || !inside(uv)) {
             continue;
         }
@@ -233,7 +235,14 @@ fn fs_hbt(in: HbtOut) -> @location(0) vec4<f32> {
         sky = sky + a * sky_texel.rgb;
         ground = ground + a * fetch(sp.info.z + views + view, uv, lod).rgb;
     }
-    let alpha = min(direct.a * in.extra.y, 1.0);
+    var alpha = min(direct.a * in.extra.y, 1.0);
+    if (in.rows.y - in.rows.x == 1u) {
+        // Cross projection: this plane carries the fraction `rows_weight` of the object, as
+        // optical depth (as boxtree's planes), so planes over each other add up to the image's
+        // opacity rather than to a third of it each.
+        let cover = min(direct.a / max(rows_weight, 1e-6), 0.995);
+        alpha = (1.0 - pow(1.0 - cover, rows_weight)) * in.extra.y;
+    }
     if (alpha < 0.002) {
         discard;
     }
@@ -244,7 +253,8 @@ fn fs_hbt(in: HbtOut) -> @location(0) vec4<f32> {
     let radius = sp.min.w * in.extra.z;
     let vis = sun_visibility(in.world + frame.sun_dir.xyz * radius, vec3<f32>(0.0));
     let sky_color = mix(frame.sky_horizon.rgb, frame.sky_zenith.rgb, 0.5);
-    let lit = tint3 * in.extra.y * (frame.sun_color.rgb * vis * direct.rgb
+    // The sums are premultiplied by `direct.a`; rescale them to the output's opacity.
+    let lit = tint3 * (alpha / max(direct.a, 1e-6)) * (frame.sun_color.rgb * vis * direct.rgb
         + sky_color * sky + frame.sky_ground.rgb * ground);
     let fogged = apply_fog_premultiplied(lit, alpha, in.world);
     return vec4<f32>(debug_tint(fogged / alpha, in.world, 2) * alpha, alpha);

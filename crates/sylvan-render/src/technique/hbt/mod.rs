@@ -47,8 +47,9 @@
 //!   of a visibility cube-map. The ambient BTF is two images per view sample — sky-facing and
 //!   ground-facing parts of the reference's hemispherical sky term — so sky and ground colours
 //!   stay run-time parameters.
-//! - **Cross projection** composites its 3 planes with premultiplied "over" (not the appendix's
-//!   exact weighted sum, which facing projection gets exactly).
+//! - **Cross projection** composites its 3 planes with premultiplied "over", each plane's
+//!   opacity its share of the optical depth (as `boxtree`), not the appendix's exact weighted
+//!   sum (which facing projection gets exactly).
 //! - Leaf transmission is applied to wood too (the baker does not tell them apart), as in
 //!   `boxtree`.
 //!
