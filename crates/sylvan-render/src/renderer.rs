@@ -543,6 +543,12 @@ impl Renderer {
         self.technique.name()
     }
 
+    /// A picture of the technique's baked images (sRGB, premultiplied colour over grey), when
+    /// it bakes any.
+    pub fn atlas_preview(&self) -> Option<&image::RgbaImage> {
+        self.technique.atlas_preview()
+    }
+
     /// Times a per-frame buffer had to grow (0 once the scene's worst frame has been seen).
     pub fn buffer_reallocations(&self) -> u32 {
         self.technique.reallocations()

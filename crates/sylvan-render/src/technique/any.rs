@@ -217,6 +217,15 @@ impl AnyTechnique {
         }
     }
 
+    /// A picture of the baked images, for techniques that bake (the first band's, for `auto`).
+    pub(crate) fn atlas_preview(&self) -> Option<&image::RgbaImage> {
+        match self {
+            Self::BoxTree(t) => Some(t.atlas_preview()),
+            Self::Auto(c) => c.techniques.iter().find_map(AnyTechnique::atlas_preview),
+            _ => None,
+        }
+    }
+
     /// Instance-buffer re-allocations (growth) so far.
     pub(crate) fn reallocations(&self) -> u32 {
         match self {

@@ -89,6 +89,7 @@ pub struct BoxTree {
     bind: wgpu::BindGroup,
     planes: u32,
     static_bytes: u64,
+    preview: image::RgbaImage,
     // Per frame (reused; nothing is allocated once the vectors have grown).
     impostors: Growable,
     residual: Growable,
@@ -108,10 +109,44 @@ impl BoxTree {
         self.impostors.reallocations + self.residual.reallocations
     }
 
+    /// A picture of the baked images: per species a row of the root box's images (level 0,
+    /// composited over grey), for the viewer's "baked atlases" view.
+    pub fn atlas_preview(&self) -> &image::RgbaImage {
+        &self.preview
+    }
+
     /// Boxes per species.
     pub fn box_counts(&self) -> Vec<usize> {
         self.species.iter().map(|s| s.boxes.len()).collect()
     }
+}
+
+/// One row per plant of its root box's images, premultiplied colour over mid-grey.
+fn preview(baked: &[BoxTreeBaked], images: usize) -> image::RgbaImage {
+    let tile = baked.first().map_or(1, |b| b.tile);
+    let mut img = image::RgbaImage::from_pixel(
+        (tile + 2) * images.max(1) as u32,
+        (tile + 2) * baked.len().max(1) as u32,
+        image::Rgba([40, 40, 40, 255]),
+    );
+    for (row, b) in baked.iter().enumerate() {
+        for (col, levels) in b.tiles.iter().take(images).enumerate() {
+            let Some(l) = levels.first() else { continue };
+            for y in 0..l.size {
+                for x in 0..l.size {
+                    let i = ((y * l.size + x) * 4) as usize;
+                    let a = l.color[i + 3] as u32;
+                    let px = |c: u8| (c as u32 + (255 - a) * 128 / 255).min(255) as u8;
+                    img.put_pixel(
+                        col as u32 * (tile + 2) + 1 + x,
+                        row as u32 * (tile + 2) + 1 + y,
+                        image::Rgba([px(l.color[i]), px(l.color[i + 1]), px(l.color[i + 2]), 255]),
+                    );
+                }
+            }
+        }
+    }
+    img
 }
 
 /// Depth of box `i` in its box tree (the root is 0).
@@ -382,6 +417,7 @@ impl Representation for BoxTree {
             },
         );
         let total_boxes = gpu_boxes.len();
+        let preview = preview(baked, images as usize);
         let static_bytes =
             atlas_bytes + box_buffer.size() + species.iter().map(|s| s.meshes.bytes()).sum::<u64>();
         Ok(Self {
@@ -393,6 +429,7 @@ impl Representation for BoxTree {
             bind,
             planes: planes_per_box,
             static_bytes,
+            preview,
             impostors: Growable::new(gpu, "boxtree_impostors", 1 << 16),
             residual: Growable::new(gpu, "boxtree_residual", 1 << 16),
             imp_staging: Vec::new(),

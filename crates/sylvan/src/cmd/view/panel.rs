@@ -37,6 +37,9 @@ pub struct UiState {
     /// Heat-map opacity.
     pub heatmap_opacity: f32,
     heatmap: Option<(u64, egui::TextureHandle)>,
+    /// The baked-image preview of the renderer made at rebuild N.
+    atlas: Option<(u64, Option<egui::TextureHandle>)>,
+    show_atlas: bool,
     /// What the panel asked for this frame.
     pub actions: Vec<Action>,
     /// Adapter line for the stats overlay.
@@ -53,6 +56,8 @@ impl UiState {
             show_heatmap: true,
             heatmap_opacity: 0.85,
             heatmap: None,
+            atlas: None,
+            show_atlas: false,
             actions: Vec::new(),
             adapter,
         }
@@ -88,6 +93,44 @@ pub fn show(ui: &mut egui::Ui, v: &mut Viewer, s: &mut UiState, clock: &FrameClo
             .show(&ctx, |ui| {
                 egui::Frame::popup(ui.style()).show(ui, |ui| overlay(ui, v, s, clock));
             });
+    }
+}
+
+/// The technique's baked images (one row per plant: its root box's images) and the bake
+/// reports; the texture is uploaded once per renderer.
+fn baked_atlases(ui: &mut egui::Ui, v: &Viewer, s: &mut UiState) {
+    if s.atlas.as_ref().is_none_or(|(g, _)| *g != v.rebuilds) {
+        let tex = v.renderer.atlas_preview().map(|img| {
+            let color = egui::ColorImage::from_rgba_unmultiplied(
+                [img.width() as usize, img.height() as usize],
+                img.as_raw(),
+            );
+            ui.ctx()
+                .load_texture("baked_atlas", color, egui::TextureOptions::NEAREST)
+        });
+        s.atlas = Some((v.rebuilds, tex));
+    }
+    let Some((_, Some(tex))) = &s.atlas else {
+        ui.label(RichText::new("baked atlases: this technique bakes none").small());
+        return;
+    };
+    ui.checkbox(&mut s.show_atlas, "show baked atlases");
+    if s.show_atlas {
+        for r in v.renderer.bake_reports() {
+            ui.label(
+                RichText::new(format!(
+                    "{}: {:.1} MB, {} in {:.0} ms",
+                    r.plant,
+                    r.bytes as f64 / 1e6,
+                    if r.from_cache { "cached" } else { "baked" },
+                    r.ms
+                ))
+                .small(),
+            );
+        }
+        let size = tex.size_vec2();
+        let w = ui.available_width().min(size.x);
+        ui.image((tex.id(), egui::vec2(w, size.y * w / size.x.max(1.0))));
     }
 }
 
@@ -331,12 +374,7 @@ fn debug(ui: &mut egui::Ui, v: &mut Viewer, s: &mut UiState) {
     for (name, view) in DebugView::ALL {
         ui.radio_value(&mut v.settings.debug, view, format!("colour: {name}"));
     }
-    ui.label(
-        RichText::new(
-            "baked atlases: the geometry technique bakes none; baking techniques list theirs here",
-        )
-        .small(),
-    );
+    baked_atlases(ui, v, s);
     ui.add(egui::Slider::new(&mut v.settings.render_scale, 0.25..=1.0).text("render scale"));
     ui.checkbox(&mut v.settings.vsync, "vsync");
     ui.checkbox(&mut s.show_stats, "stats overlay");
