@@ -156,7 +156,7 @@ impl Representation for Hbt {
         let mut frames = Vec::new();
         let mut tiles: Vec<&[Vec<u8>]> = Vec::new();
         let mut centres = Vec::with_capacity(plants.len());
-        for (plant, b) in plants.iter().zip(baked) {
+        for (s, (plant, b)) in plants.iter().zip(baked).enumerate() {
             if b.tile != tile
                 || b.view_level != params.view_level
                 || b.light_level != params.light_level
@@ -172,6 +172,12 @@ impl Representation for Hbt {
                 )));
             }
             let (min, max) = (Vec3::from(b.bbox_min), Vec3::from(b.bbox_max));
+            // Species sharing a plant share its images (the bake gives them equal assets).
+            if let Some(same) = baked[..s].iter().position(|o| o == b) {
+                gpu_species.push(gpu_species[same]);
+                centres.push(centres[same]);
+                continue;
+            }
             let first_frame = frames.len() as u32;
             for &d in views.directions() {
                 let f = hb::view_frame(d, min, max, tile);

@@ -54,9 +54,10 @@
 //!   `boxtree`.
 //!
 //! Cost: bake = V + L rasterisations plus a CPU lighting pass of V·L·(tile·ss)² samples; per
-//! frame, 2 direction look-ups per tree in view and 1 per tree per cascade (CPU), one instanced
+//! frame, 2 direction look-ups per tree in view and 1 per tree per cascade (CPU, ~83 ns each
+//! in release on this project's test machine: ~2 ms for the default view), one instanced
 //! draw per pass, up to 9 + 6 texture fetches per fragment. Memory: (V·L + 2V) tiles of
-//! `tile²` RGBA8 with mips, per species, in one `texture_2d_array` atlas (66 × 18 at 32 px, the
+//! `tile²` RGBA8 with mips, per plant (species sharing a plant share it), in one atlas (66 × 18 at 32 px, the
 //! default: 7.2 MB per plant; 18 × 18: 1.97 MB; main branches add that per distinct branch
 //! object).
 
