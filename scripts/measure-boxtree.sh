@@ -6,7 +6,7 @@
 #   2. the default scene at 480x270 and 1280x720: FLIP, and bench medians boxtree vs geometry;
 #   3. a 60-frame dolly from 20 m to 1 km: consecutive-frame FLIP, max/median;
 #   4. bake time and image memory per preset at 64 and 128 px.
-# Usage: scripts/measure-boxtree.sh [OUT_DIR]   (default out/measure-boxtree; ~15 min on lavapipe)
+# Usage: scripts/measure-boxtree.sh [OUT_DIR]   (default out/measure-boxtree; ~20 min on lavapipe)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT=${1:-out/measure-boxtree}
@@ -75,8 +75,12 @@ echo "| size | technique | round | median ms | p95 ms | camera triangles | shado
 echo "|---|---|---|---|---|---|---|---|---|"
 for size in 480x270 1280x720; do
   for round in 1 2; do
-    for t in geometry boxtree; do
-      $S bench --size $size --technique $t --frames 5 --json > "$OUT/bench-$size-$t-$round.json"
+    for t in geometry boxtree boxtree-diagonal; do
+      case $t in
+        boxtree-diagonal) args=(--technique boxtree --planes diagonal) ;;
+        *) args=(--technique $t) ;;
+      esac
+      $S bench --size $size "${args[@]}" --frames 5 --json > "$OUT/bench-$size-$t-$round.json"
       python3 - "$OUT/bench-$size-$t-$round.json" "$size" "$t" "$round" <<'PY'
 import json, sys
 d = json.load(open(sys.argv[1]))
@@ -88,7 +92,8 @@ PY
 import json, sys, statistics
 out, size = sys.argv[1], sys.argv[2]
 m = lambda t: statistics.median([json.load(open(f"{out}/bench-{size}-{t}-{r}.json"))["frame_ms"]["median"] for r in (1, 2)])
-print(f"| {size} | **geometry / boxtree** | | **{m('geometry') / m('boxtree'):.1f}×** | | | | | |")
+print(f"| {size} | **geometry / boxtree (axis, default)** | | **{m('geometry') / m('boxtree'):.1f}×** | | | | | |")
+print(f"| {size} | **geometry / boxtree (diagonal)** | | **{m('geometry') / m('boxtree-diagonal'):.1f}×** | | | | | |")
 PY
 done
 echo

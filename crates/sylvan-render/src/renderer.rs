@@ -90,6 +90,9 @@ impl RenderOptions {
 pub struct FrameStats {
     /// Frame time in milliseconds (GPU timestamps, or wall clock).
     pub frame_ms: f64,
+    /// CPU milliseconds spent before recording: culling and the technique's per-frame work
+    /// (level-of-detail traversal, instance uploads). Not part of `frame_ms`.
+    pub cpu_ms: f64,
     /// Which clock measured `frame_ms`.
     pub timer: TimerKind,
     /// Trees in the scene.
@@ -305,6 +308,7 @@ impl Renderer {
         );
         let view_proj = view.view_proj();
         let frustum = Frustum::from_matrix(view_proj);
+        let cpu_start = std::time::Instant::now();
         self.instances.update(
             gpu,
             &frustum,
@@ -327,6 +331,7 @@ impl Renderer {
             cascade_far: cascades.map(|c| c.far),
         };
         self.technique.update(gpu, &input)?;
+        let cpu_ms = cpu_start.elapsed().as_secs_f64() * 1e3;
 
         let raw = self.frame_uniforms(&view, view_proj, sun, sun_dir, shadows, &cascades);
         gpu.queue
@@ -426,6 +431,7 @@ impl Renderer {
         let asset_bytes = self.technique.bytes();
         Ok(FrameStats {
             frame_ms,
+            cpu_ms,
             timer: self.timer.kind(),
             trees_total: self.instances.total(),
             trees_drawn: self

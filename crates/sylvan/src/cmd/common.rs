@@ -45,9 +45,10 @@ pub struct BakeArgs {
     /// boxtree: image size per box face in texels (LCV04 uses 64 or 128).
     #[arg(long, default_value_t = BoxTreeParams::default().tile)]
     pub tile: u32,
-    /// boxtree: plane arrangement, `diagonal` (LCV04 fig. 6; measures better on forests, see
-    /// BENCHMARKS.md), `axis` (fig. 3) or `billboard` (the naive one-image baseline).
-    #[arg(long, default_value = "diagonal")]
+    /// boxtree: plane arrangement, `axis` (LCV04 fig. 3; 1.6× faster than diagonal at equal
+    /// fidelity targets, see BENCHMARKS.md), `diagonal` (fig. 6) or `billboard` (the naive
+    /// one-image baseline).
+    #[arg(long, default_value = "axis")]
     pub planes: String,
     /// boxtree: volume-ratio threshold for boxes to get images (LCV04 §3.2.4).
     #[arg(long, default_value_t = BoxTreeParams::default().volume_threshold)]

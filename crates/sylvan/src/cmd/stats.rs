@@ -41,6 +41,8 @@ pub struct Report {
     pub size: [u32; 2],
     pub spp: u32,
     pub frame_ms: Summary,
+    /// CPU time before recording each frame (culling, LOD traversal, uploads), not in `frame_ms`.
+    pub cpu_ms: Summary,
     pub timer: &'static str,
     pub trees_total: usize,
     pub trees_drawn: BTreeMap<String, u32>,
@@ -108,6 +110,7 @@ impl Report {
             size,
             spp,
             frame_ms: Summary::of(&times),
+            cpu_ms: Summary::of(&frames.iter().map(|f| f.cpu_ms).collect::<Vec<_>>()),
             timer: last.timer.as_str(),
             trees_total: last.trees_total,
             trees_drawn: last.trees_drawn,
