@@ -34,8 +34,9 @@ pub struct BakeCmdArgs {
     pub bake: BakeArgs,
 }
 
+/// What every bake reports, whatever the technique (flattened into the JSON).
 #[derive(Serialize)]
-struct BakeSummary {
+struct Common {
     plant: String,
     technique: &'static str,
     from_cache: bool,
@@ -44,12 +45,94 @@ struct BakeSummary {
     file_bytes: u64,
     /// GPU texture bytes of the images (all mips).
     image_bytes: u64,
-    boxes: usize,
     images: usize,
     tile: u32,
-    planes: &'static str,
     #[serde(skip_serializing_if = "Option::is_none")]
     rebaked_because: Option<String>,
+}
+
+impl Common {
+    /// ", 2.9 MB of images, baked in 412 ms → FILE".
+    fn tail(&self) -> String {
+        format!(
+            "{:.2} MB of images, {} in {:.0} ms{}",
+            self.image_bytes as f64 / 1e6,
+            if self.from_cache {
+                "read from cache"
+            } else {
+                "baked"
+            },
+            self.bake_ms,
+            self.file
+                .as_ref()
+                .map(|f| format!(" → {f}"))
+                .unwrap_or_default()
+        )
+    }
+}
+
+#[derive(Serialize)]
+struct BoxTreeSummary {
+    #[serde(flatten)]
+    common: Common,
+    boxes: usize,
+    planes: &'static str,
+}
+
+#[derive(Serialize)]
+struct HbtSummary {
+    #[serde(flatten)]
+    common: Common,
+    views: usize,
+    lights: usize,
+    /// Main-branch base objects with their own BTF (`--hbt-levels 2`).
+    branch_objects: usize,
+}
+
+/// Bakes (or reads) `R`'s asset for `plant` with a progress bar, into `--out` or the cache.
+fn bake_one<R: sylvan_render::technique::Representation>(
+    args: &BakeCmdArgs,
+    plant: &sylvan_plant::Plant,
+    params: &R::Params,
+) -> anyhow::Result<(R::Baked, Common)> {
+    let policy = match &args.out {
+        Some(f) => CachePolicy::File(f.clone()),
+        None => args.bake.cache(),
+    };
+    let gpu = sylvan_gpu::Gpu::new()?;
+    let bar = BakeBar::new();
+    let (baked, report) = bake::load_or_bake::<R>(&gpu, plant, params, &policy, &mut |d, t| {
+        bar.update(&plant.name, d, t)
+    })
+    .with_context(|| format!("baking {}", plant.name))?;
+    bar.finish();
+    let common = Common {
+        plant: plant.name.clone(),
+        technique: R::NAME,
+        from_cache: report.from_cache,
+        bake_ms: report.ms,
+        file: report.path.as_ref().map(|p| p.display().to_string()),
+        file_bytes: report
+            .path
+            .as_ref()
+            .and_then(|p| std::fs::metadata(p).ok())
+            .map_or(0, |m| m.len()),
+        image_bytes: 0,
+        images: 0,
+        tile: 0,
+        rebaked_because: report.stale.clone(),
+    };
+    Ok((baked, common))
+}
+
+/// Prints `summary` as JSON, or `line` for people.
+fn print(json: bool, summary: &impl Serialize, line: String) -> anyhow::Result<()> {
+    if json {
+        println!("{}", serde_json::to_string(summary)?);
+    } else {
+        println!("{line}");
+    }
+    Ok(())
 }
 
 /// Runs `sylvan bake`.
@@ -61,158 +144,61 @@ pub fn run(args: BakeCmdArgs) -> anyhow::Result<()> {
             bail!("no plant given — pass a SOURCE file (.lsys, .glb, .gltf, .obj) or --preset NAME")
         }
     };
-    let technique = TechniqueKind::parse(&args.technique)?;
-    if technique == TechniqueKind::Hbt {
-        return run_hbt(&args, &plant);
-    }
-    if technique != TechniqueKind::BoxTree {
-        bail!(
-            "--technique {}: nothing to bake (only boxtree and hbt bake so far) — use --technique boxtree",
+    match TechniqueKind::parse(&args.technique)? {
+        TechniqueKind::BoxTree => {
+            let (baked, mut common) = bake_one::<BoxTree>(&args, &plant, &args.bake.boxtree()?)?;
+            common.image_bytes = baked.image_bytes();
+            common.images = baked.tiles.len();
+            common.tile = baked.tile;
+            let s = BoxTreeSummary {
+                boxes: baked.boxes.len(),
+                planes: baked.layout.name(),
+                common,
+            };
+            let line = format!(
+                "{}: {} boxes, {} images of {}² ({} planes), {}",
+                s.common.plant,
+                s.boxes,
+                s.common.images,
+                s.common.tile,
+                s.planes,
+                s.common.tail()
+            );
+            print(args.json, &s, line)
+        }
+        TechniqueKind::Hbt => {
+            let (baked, mut common) = bake_one::<Hbt>(&args, &plant, &args.bake.hbt()?)?;
+            common.image_bytes = baked.image_bytes();
+            common.images = baked.direct.len()
+                + baked.ambient.len()
+                + baked
+                    .objects
+                    .iter()
+                    .map(|o| o.direct.len() + o.ambient.len())
+                    .sum::<usize>();
+            common.tile = baked.tile;
+            let s = HbtSummary {
+                views: baked.views(),
+                lights: baked.lights(),
+                branch_objects: baked.objects.len(),
+                common,
+            };
+            let line = format!(
+                "{}: {} views × {} lights + {} ambient images of {}² for the tree, {} branch objects, {} images in all, {}",
+                s.common.plant,
+                s.views,
+                s.lights,
+                baked.ambient.len(),
+                s.common.tile,
+                s.branch_objects,
+                s.common.images,
+                s.common.tail()
+            );
+            print(args.json, &s, line)
+        }
+        _ => bail!(
+            "--technique {}: nothing to bake (only boxtree and hbt bake so far) — use --technique boxtree or hbt",
             args.technique
-        );
+        ),
     }
-    let params = args.bake.boxtree()?;
-    let policy = match &args.out {
-        Some(f) => CachePolicy::File(f.clone()),
-        None => args.bake.cache(),
-    };
-    let gpu = sylvan_gpu::Gpu::new()?;
-    let bar = BakeBar::new();
-    let (baked, report) =
-        bake::load_or_bake::<BoxTree>(&gpu, &plant, &params, &policy, &mut |d, t| {
-            bar.update(&plant.name, d, t)
-        })
-        .with_context(|| format!("baking {}", plant.name))?;
-    bar.finish();
-    let summary = BakeSummary {
-        plant: plant.name.clone(),
-        technique: "boxtree",
-        from_cache: report.from_cache,
-        bake_ms: report.ms,
-        file: report.path.as_ref().map(|p| p.display().to_string()),
-        file_bytes: report
-            .path
-            .as_ref()
-            .and_then(|p| std::fs::metadata(p).ok())
-            .map_or(0, |m| m.len()),
-        image_bytes: baked.image_bytes(),
-        boxes: baked.boxes.len(),
-        images: baked.tiles.len(),
-        tile: baked.tile,
-        planes: baked.layout.name(),
-        rebaked_because: report.stale.clone(),
-    };
-    if args.json {
-        println!("{}", serde_json::to_string(&summary)?);
-    } else {
-        println!(
-            "{}: {} boxes, {} images of {}² ({} planes), {:.1} MB of images, {} in {:.0} ms{}",
-            summary.plant,
-            summary.boxes,
-            summary.images,
-            summary.tile,
-            summary.planes,
-            summary.image_bytes as f64 / 1e6,
-            if summary.from_cache {
-                "read from cache"
-            } else {
-                "baked"
-            },
-            summary.bake_ms,
-            summary
-                .file
-                .as_ref()
-                .map(|f| format!(" → {f}"))
-                .unwrap_or_default()
-        );
-    }
-    Ok(())
-}
-
-#[derive(Serialize)]
-struct HbtBakeSummary {
-    plant: String,
-    technique: &'static str,
-    from_cache: bool,
-    bake_ms: f64,
-    file: Option<String>,
-    file_bytes: u64,
-    /// GPU texture bytes of the images (all mips).
-    image_bytes: u64,
-    views: usize,
-    lights: usize,
-    /// Main-branch base objects with their own BTF (`--hbt-levels 2`).
-    branch_objects: usize,
-    images: usize,
-    tile: u32,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    rebaked_because: Option<String>,
-}
-
-/// `sylvan bake --technique hbt`: the plant's top-level BTF (MNP01).
-fn run_hbt(args: &BakeCmdArgs, plant: &sylvan_plant::Plant) -> anyhow::Result<()> {
-    let params = args.bake.hbt()?;
-    let policy = match &args.out {
-        Some(f) => CachePolicy::File(f.clone()),
-        None => args.bake.cache(),
-    };
-    let gpu = sylvan_gpu::Gpu::new()?;
-    let bar = BakeBar::new();
-    let (baked, report) = bake::load_or_bake::<Hbt>(&gpu, plant, &params, &policy, &mut |d, t| {
-        bar.update(&plant.name, d, t)
-    })
-    .with_context(|| format!("baking {}", plant.name))?;
-    bar.finish();
-    let summary = HbtBakeSummary {
-        plant: plant.name.clone(),
-        technique: "hbt",
-        from_cache: report.from_cache,
-        bake_ms: report.ms,
-        file: report.path.as_ref().map(|p| p.display().to_string()),
-        file_bytes: report
-            .path
-            .as_ref()
-            .and_then(|p| std::fs::metadata(p).ok())
-            .map_or(0, |m| m.len()),
-        image_bytes: baked.image_bytes(),
-        views: baked.views(),
-        lights: baked.lights(),
-        branch_objects: baked.objects.len(),
-        images: baked.direct.len()
-            + baked.ambient.len()
-            + baked
-                .objects
-                .iter()
-                .map(|o| o.direct.len() + o.ambient.len())
-                .sum::<usize>(),
-        tile: baked.tile,
-        rebaked_because: report.stale.clone(),
-    };
-    if args.json {
-        println!("{}", serde_json::to_string(&summary)?);
-    } else {
-        println!(
-            "{}: {} views × {} lights + {} ambient images of {}² for the tree, {} branch objects, {} images in all, {:.2} MB of images, {} in {:.0} ms{}",
-            summary.plant,
-            summary.views,
-            summary.lights,
-            baked.ambient.len(),
-            summary.tile,
-            summary.branch_objects,
-            summary.images,
-            summary.image_bytes as f64 / 1e6,
-            if summary.from_cache {
-                "read from cache"
-            } else {
-                "baked"
-            },
-            summary.bake_ms,
-            summary
-                .file
-                .as_ref()
-                .map(|f| format!(" → {f}"))
-                .unwrap_or_default()
-        );
-    }
-    Ok(())
 }
