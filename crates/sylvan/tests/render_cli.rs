@@ -246,3 +246,87 @@ fn no_adapter_names_the_packages_to_install() {
         ],
     );
 }
+
+fn json_of(out: &Output) -> serde_json::Value {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("one JSON object on stdout")
+}
+
+#[test]
+fn bake_writes_reuses_and_renders_from_the_cache() {
+    let dir = workdir("bake_cache");
+    let cache = dir.join("cache");
+    let c = cache.to_str().unwrap();
+    let first = json_of(&sylvan(
+        &["bake", "--preset", "bush", "--cache-dir", c, "--json"],
+        &dir,
+    ));
+    assert_eq!(first["technique"], "boxtree");
+    assert_eq!(first["from_cache"], false);
+    assert!(first["boxes"].as_u64().unwrap() > 1);
+    assert_eq!(first["images"], first["boxes"].as_u64().unwrap() * 6);
+    let file = std::path::PathBuf::from(first["file"].as_str().unwrap());
+    assert!(file.starts_with(&cache) && file.exists());
+    let again = json_of(&sylvan(
+        &["bake", "--preset", "bush", "--cache-dir", c, "--json"],
+        &dir,
+    ));
+    assert_eq!(again["from_cache"], true);
+    assert_eq!(again["file"], first["file"]);
+    // render with boxtree reads the same cache and reports the technique and its bake time.
+    let scene = tiny_scene(&dir);
+    let stats = dir.join("s.json");
+    let out = sylvan(
+        &[
+            "render",
+            scene.to_str().unwrap(),
+            "--technique",
+            "boxtree",
+            "--size",
+            "64x36",
+            "--cache-dir",
+            c,
+            "--out",
+            dir.join("b.png").to_str().unwrap(),
+            "--stats",
+            stats.to_str().unwrap(),
+        ],
+        &dir,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let s: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    assert_eq!(s["technique"], "boxtree");
+    assert_eq!(s["trees_drawn"]["boxtree"], 3);
+    assert!(s["baked_bytes"].as_u64().unwrap() > 0);
+}
+
+#[test]
+fn bad_bake_input_is_one_error_line() {
+    let dir = workdir("bake_bad");
+    for (args, needles) in [
+        (
+            vec!["bake", "--preset", "bush", "--tile", "100", "--no-cache"],
+            vec!["tile 100", "—"],
+        ),
+        (
+            vec!["bake", "--preset", "bush", "--planes", "round"],
+            vec!["--planes round"],
+        ),
+        (
+            vec!["bake", "--preset", "bush", "--technique", "geometry"],
+            vec!["nothing to bake"],
+        ),
+        (vec!["bake"], vec!["no plant given"]),
+        (vec!["bake", "missing.lsys"], vec!["missing.lsys"]),
+    ] {
+        assert_one_line_error(&sylvan(&args, &dir), &needles);
+    }
+}
