@@ -319,7 +319,7 @@ impl Renderer {
 
         let input = FrameInput {
             eye: view.eye,
-            pixels_per_metre: self.targets.output.height as f32 / (2.0 * (view.fov_y * 0.5).tan()),
+            pixels_per_metre: self.pixels_per_metre(&view),
             sun_dir,
             instances: &self.instances,
             shadow_texel_m: cascades.map(|c| {
@@ -458,6 +458,11 @@ impl Renderer {
         Ok(sylvan_gpu::read_rgba8(gpu, &self.targets.output.color)?)
     }
 
+    /// Pixels covered by one metre at one metre's distance in the output image.
+    fn pixels_per_metre(&self, view: &View) -> f32 {
+        self.targets.output.height as f32 / (2.0 * (view.fov_y * 0.5).tan())
+    }
+
     fn frame_uniforms(
         &self,
         view: &View,
@@ -491,7 +496,7 @@ impl Renderer {
                 1.0 / self.frame.shadow_resolution as f32,
                 0.0,
                 self.options.debug.code(),
-                self.targets.output.height as f32 / (2.0 * (view.fov_y * 0.5).tan()),
+                self.pixels_per_metre(view),
             ],
         }
     }

@@ -114,11 +114,6 @@ impl BoxTree {
     pub fn atlas_preview(&self) -> &image::RgbaImage {
         &self.preview
     }
-
-    /// Boxes per species.
-    pub fn box_counts(&self) -> Vec<usize> {
-        self.species.iter().map(|s| s.boxes.len()).collect()
-    }
 }
 
 /// One row per plant of its root box's images, premultiplied colour over mid-grey.

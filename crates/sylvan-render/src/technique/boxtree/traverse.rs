@@ -68,15 +68,10 @@ impl Placement {
 /// Presences this close to 0 or 1 are snapped (see [`traverse`]).
 pub const SNAP: f32 = 0.02;
 
-/// The LOD distance of a box (metres, perspective views): where one of its texels covers one
-/// pixel (LCV04 §4.1).
-pub fn lod_distance(b: &BakedBox, scale: f32, view: &LodView) -> f32 {
-    b.metres_per_texel * scale * view.pixels_per_metre
-}
-
 /// Impostor presence for a pixel footprint `ratio` times the box's texel size: 1 (images only)
 /// at `1 + band` and beyond, 0 (opened) at 1 or below, smooth in between. In a perspective view
-/// the ratio is `distance / lod_distance`.
+/// the ratio is the distance over the box's LOD distance (LCV04 §4.1: where one of its texels
+/// covers one pixel).
 pub fn impostor_presence(ratio: f32, band: f32) -> f32 {
     let t = ((ratio - 1.0) / band.max(1e-3)).clamp(0.0, 1.0);
     t * t * (3.0 - 2.0 * t)
