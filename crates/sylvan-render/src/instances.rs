@@ -43,6 +43,8 @@ struct Placed {
 pub struct Instances {
     placed: Vec<Placed>,
     staging: Vec<GpuTreeInstance>,
+    /// Per staged record, the index of its tree in [`Instances::placed_trees`].
+    ids: Vec<u32>,
     buffer: wgpu::Buffer,
     /// `ranges[pass][species]`: instance range in the buffer.
     pub ranges: Vec<Vec<Range<u32>>>,
@@ -100,6 +102,7 @@ impl Instances {
         });
         Self {
             staging: Vec::with_capacity(capacity as usize),
+            ids: Vec::with_capacity(capacity as usize),
             placed,
             buffer,
             ranges: vec![vec![0..0; bounds.len()]; 1 + CASCADES],
@@ -117,13 +120,16 @@ impl Instances {
         cascades: Option<&[Cascade; CASCADES]>,
     ) {
         self.staging.clear();
+        self.ids.clear();
         for species in 0..self.species_count {
             let start = self.staging.len() as u32;
-            for p in self.placed.iter().filter(|p| p.species == species) {
-                if p.centre.distance(eye) - p.radius < far
+            for (i, p) in self.placed.iter().enumerate() {
+                if p.species == species
+                    && p.centre.distance(eye) - p.radius < far
                     && frustum.intersects_sphere(p.centre, p.radius)
                 {
                     self.staging.push(p.gpu);
+                    self.ids.push(i as u32);
                 }
             }
             self.ranges[0][species] = start..self.staging.len() as u32;
@@ -133,9 +139,10 @@ impl Instances {
             for species in 0..self.species_count {
                 let start = self.staging.len() as u32;
                 if let Some(clip) = &clip {
-                    for p in self.placed.iter().filter(|p| p.species == species) {
-                        if clip.intersects_sphere(p.centre, p.radius) {
+                    for (i, p) in self.placed.iter().enumerate() {
+                        if p.species == species && clip.intersects_sphere(p.centre, p.radius) {
                             self.staging.push(p.gpu);
+                            self.ids.push(i as u32);
                         }
                     }
                 }
@@ -159,6 +166,7 @@ impl Instances {
         Self {
             placed: Vec::new(),
             staging: Vec::with_capacity(capacity),
+            ids: Vec::with_capacity(capacity),
             buffer,
             ranges: vec![vec![0..0; species_count]; 1 + CASCADES],
             species_count,
@@ -175,15 +183,21 @@ impl Instances {
         mut presence: impl FnMut(&GpuTreeInstance) -> f32,
     ) {
         self.staging.clear();
+        self.ids.clear();
         for pass in 0..=CASCADES {
             for species in 0..self.species_count.min(master.species_count) {
                 let start = self.staging.len() as u32;
-                for rec in master.records(pass, species) {
+                for (rec, &id) in master
+                    .records(pass, species)
+                    .iter()
+                    .zip(master.ids(pass, species))
+                {
                     let p = presence(rec);
                     if p > 0.0 {
                         let mut r = *rec;
                         r.rot[3] *= p;
                         self.staging.push(r);
+                        self.ids.push(id);
                     }
                 }
                 self.ranges[pass][species] = start..self.staging.len() as u32;
@@ -203,6 +217,18 @@ impl Instances {
     pub fn records(&self, pass: usize, species: usize) -> &[GpuTreeInstance] {
         let r = &self.ranges[pass][species];
         &self.staging[r.start as usize..r.end as usize]
+    }
+
+    /// The tree index (into [`Instances::placed_trees`]) of each of [`Instances::records`].
+    pub fn ids(&self, pass: usize, species: usize) -> &[u32] {
+        let r = &self.ranges[pass][species];
+        &self.ids[r.start as usize..r.end as usize]
+    }
+
+    /// Every placed tree, in id order: (species, record with presence 1). Empty for a derived
+    /// list (its ids are its master's).
+    pub fn placed_trees(&self) -> impl Iterator<Item = (usize, GpuTreeInstance)> + '_ {
+        self.placed.iter().map(|p| (p.species, p.gpu))
     }
 
     /// Number of species.

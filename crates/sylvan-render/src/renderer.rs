@@ -109,6 +109,12 @@ pub struct FrameStats {
     pub asset_bytes: u64,
     /// GPU bytes of everything the renderer holds (assets, terrain, shadow maps, targets).
     pub gpu_bytes: u64,
+    /// CPU bytes of visibility structures (`hbt`'s cube-maps; 0 for other techniques).
+    pub visibility_bytes: u64,
+    /// Milliseconds spent building them when the renderer was made.
+    pub visibility_ms: f64,
+    /// Trees drawn opened into a lower level of their hierarchy (`hbt`), this frame.
+    pub trees_opened: u32,
 }
 
 struct Targets {
@@ -209,6 +215,7 @@ impl Renderer {
                 policy: &options.cache,
                 lod_chain: &scene.lod_chain,
                 instances: &instances,
+                terrain: Some(&scene.terrain),
             },
             progress,
         )?;
@@ -429,7 +436,11 @@ impl Renderer {
         gpu.check()?;
 
         let asset_bytes = self.technique.bytes();
+        let (visibility_bytes, visibility_ms, trees_opened) = self.technique.hierarchy_stats();
         Ok(FrameStats {
+            visibility_bytes,
+            visibility_ms,
+            trees_opened,
             frame_ms,
             cpu_ms,
             timer: self.timer.kind(),

@@ -91,7 +91,7 @@ fn baked_btf_is_lit_and_self_shadowed() {
         b.direct.len(),
         b.ambient.len(),
         b.tile,
-        b.image_bytes(),
+        b.image_bytes().0,
         start.elapsed().as_secs_f64() * 1e3
     );
     // Samples 0..6 are +X, −X, +Y, −Y, +Z, −Z at every level.
@@ -263,7 +263,7 @@ fn relighting_beats_an_impostor_baked_under_one_light() {
 }
 
 #[test]
-fn main_branches_get_their_own_btfs() {
+fn the_level_below_gets_its_own_btfs_placements_and_cube_maps() {
     let gpu = gpu();
     let plant = sylvan_plant::preset("pine").unwrap();
     let branches = hbt::bake::main_branches(&plant);
@@ -275,23 +275,46 @@ fn main_branches_get_their_own_btfs() {
         shadow_resolution: 64,
         view_level: 0,
         light_level: 0,
+        branch_view_level: 0,
+        branch_light_level: 0,
+        max_branch_objects: 4,
+        cube_resolution: 4,
         ..Default::default()
     };
     let start = std::time::Instant::now();
     let b = hbt::bake::bake(&gpu, &plant, &p, |_, _| {}).expect("bake");
+    let (tree_bytes, branch_bytes) = b.image_bytes();
     eprintln!(
-        "pine, 2 levels (6 × 6 directions, 16²): {} branch objects for {} placements, {} bytes, {:.0} ms",
+        "pine, 2 levels (6 × 6 directions, 16²): {} objects for {} placements ({} distinct main branches), {tree_bytes} + {branch_bytes} image bytes, {} cube-map bytes, {:.0} ms",
         b.objects.len(),
-        branches.iter().map(|b| b.1).sum::<u32>(),
-        b.image_bytes(),
+        b.placements.len(),
+        branches.len(),
+        b.cubes.len(),
         start.elapsed().as_secs_f64() * 1e3
     );
-    assert_eq!(b.objects.len(), branches.len());
+    // At most 4 representatives, plus the rest (trunk and the leaves on it).
+    assert!(
+        b.objects.len() <= 5 && b.objects.len() >= 2,
+        "{}",
+        b.objects.len()
+    );
+    assert_eq!(
+        b.objects.last().unwrap().object,
+        hbt::bake::REST_OBJECT,
+        "the rest comes last"
+    );
+    // Every main-branch placement of the root is drawn, plus the rest once.
+    let main: u32 = branches.iter().map(|b| b.1).sum();
+    assert_eq!(b.placements.len() as u32, main + 1);
+    assert_eq!(
+        b.objects.iter().map(|o| o.uses).sum::<u32>(),
+        b.placements.len() as u32
+    );
     let tree = Vec3::from(b.bbox_max) - Vec3::from(b.bbox_min);
     for o in &b.objects {
-        // A branch is smaller than the tree, and is in its images (6 views × 6 lights).
+        // An object is no bigger than the tree, and is in its images (6 views × 6 lights).
         let size = Vec3::from(o.bbox_max) - Vec3::from(o.bbox_min);
-        assert!(size.length() < tree.length(), "{size} vs {tree}");
+        assert!(size.length() <= tree.length() * 1.001, "{size} vs {tree}");
         assert_eq!(o.direct.len(), 36);
         let cover = |img: &[Vec<u8>]| img[0].chunks(4).map(|t| t[3] as u32).sum::<u32>();
         let seen = (0..6).map(|v| cover(&o.direct[v * 6])).max().unwrap();
@@ -301,6 +324,32 @@ fn main_branches_get_their_own_btfs() {
             assert_eq!(cover(&o.direct[v * 6]), cover(&o.direct[v * 6 + 3]));
         }
     }
+    // Placed objects stay inside the tree's box (a representative scaled to the branch it
+    // stands for).
+    for pl in &b.placements {
+        let o = &b.objects[pl.object as usize];
+        for k in 0..8 {
+            let c = hbt::visibility::corner(Vec3::from(o.bbox_min), Vec3::from(o.bbox_max), k);
+            let w = pl.affine().transform_point3(c);
+            let (lo, hi) = (Vec3::from(b.bbox_min), Vec3::from(b.bbox_max));
+            assert!(
+                w.cmpge(lo - tree * 0.25).all() && w.cmple(hi + tree * 0.25).all(),
+                "{w} outside {lo}..{hi}"
+            );
+        }
+    }
+    // The branch level's cube-maps: the rest of the tree hides part of every branch's sky.
+    assert_eq!(b.cubes.len(), b.placements.len() * 8 * 6 * 16);
+    let dirs = hbt::visibility::directions(4);
+    let mean_sky: f32 = (0..b.placements.len())
+        .flat_map(|p| (0..8).map(move |k| (p, k)))
+        .map(|(p, k)| hbt::visibility::sky_transmittance(b.cube(p, k), &dirs))
+        .sum::<f32>()
+        / (b.placements.len() * 8) as f32;
+    assert!(
+        mean_sky > 0.2 && mean_sky < 0.98,
+        "mean sky transmittance {mean_sky}"
+    );
     assert_eq!(HbtBaked::decode(&b.encode()).unwrap(), b);
 }
 

@@ -39,8 +39,11 @@ pub(crate) struct PrepareInput<'a> {
     pub policy: &'a CachePolicy,
     /// The scene's `[lod] chain` (for `auto`).
     pub lod_chain: &'a [String],
-    /// The frame's instance list (its capacity sizes the chain's band lists).
+    /// The frame's instance list (its capacity sizes the chain's band lists; `hbt` builds its
+    /// visibility cube-maps for its trees).
     pub instances: &'a Instances,
+    /// The scene's terrain (`hbt`'s visibility cube-maps).
+    pub terrain: Option<&'a sylvan_scene::Terrain>,
 }
 
 /// Bakes (or reads from the cache) `R`'s asset for each plant — once per distinct plant — and
@@ -98,7 +101,9 @@ impl AnyTechnique {
                 Ok((Self::BoxTree(Box::new(b)), r))
             }
             TechniqueKind::Hbt => {
-                let (h, r) = prepare_baked::<Hbt>(gpu, frame, plants, input.hbt, policy, progress)?;
+                let (mut h, r) =
+                    prepare_baked::<Hbt>(gpu, frame, plants, input.hbt, policy, progress)?;
+                h.place(input.instances, input.terrain);
                 Ok((Self::Hbt(Box::new(h)), r))
             }
             TechniqueKind::Auto => {
@@ -223,6 +228,20 @@ impl AnyTechnique {
             Self::BoxTree(t) => Some(t.atlas_preview()),
             Self::Auto(c) => c.techniques.iter().find_map(AnyTechnique::atlas_preview),
             _ => None,
+        }
+    }
+
+    /// `hbt`'s visibility structure (CPU bytes, build milliseconds) and trees opened into the
+    /// level below this frame; zeros for other techniques.
+    pub(crate) fn hierarchy_stats(&self) -> (u64, f64, u32) {
+        match self {
+            Self::Hbt(t) => (t.visibility_bytes(), t.visibility_build_ms(), t.opened()),
+            Self::Auto(c) => c
+                .techniques
+                .iter()
+                .map(AnyTechnique::hierarchy_stats)
+                .fold((0, 0.0, 0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2)),
+            _ => (0, 0.0, 0),
         }
     }
 

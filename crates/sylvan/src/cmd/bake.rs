@@ -85,8 +85,17 @@ struct HbtSummary {
     common: Common,
     views: usize,
     lights: usize,
-    /// Main-branch base objects with their own BTF (`--hbt-levels 2`).
+    /// Objects of the level below with their own BTF (`--hbt-levels 2`): representative main
+    /// branches and the plant's rest.
     branch_objects: usize,
+    /// Where the level below places them.
+    branch_placements: usize,
+    /// Image bytes of the tree level (all mips).
+    tree_bytes: u64,
+    /// Image bytes of the level below.
+    branch_bytes: u64,
+    /// Bytes of the branch level's visibility cube-maps.
+    cube_bytes: u64,
 }
 
 /// Bakes (or reads) `R`'s asset for `plant` with a progress bar, into `--out` or the cache.
@@ -168,7 +177,8 @@ pub fn run(args: BakeCmdArgs) -> anyhow::Result<()> {
         }
         TechniqueKind::Hbt => {
             let (baked, mut common) = bake_one::<Hbt>(&args, &plant, &args.bake.hbt()?)?;
-            common.image_bytes = baked.image_bytes();
+            let (tree_bytes, branch_bytes) = baked.image_bytes();
+            common.image_bytes = tree_bytes + branch_bytes + baked.cubes.len() as u64;
             common.images = baked.direct.len()
                 + baked.ambient.len()
                 + baked
@@ -181,16 +191,24 @@ pub fn run(args: BakeCmdArgs) -> anyhow::Result<()> {
                 views: baked.views(),
                 lights: baked.lights(),
                 branch_objects: baked.objects.len(),
+                branch_placements: baked.placements.len(),
+                tree_bytes,
+                branch_bytes,
+                cube_bytes: baked.cubes.len() as u64,
                 common,
             };
             let line = format!(
-                "{}: {} views × {} lights + {} ambient images of {}² for the tree, {} branch objects, {} images in all, {}",
+                "{}: {} views × {} lights + {} ambient images of {}² for the tree ({:.1} MB), {} branch objects for {} placements ({:.1} MB, cube-maps {:.2} MB), {} images in all, {}",
                 s.common.plant,
                 s.views,
                 s.lights,
                 baked.ambient.len(),
                 s.common.tile,
+                tree_bytes as f64 / 1e6,
                 s.branch_objects,
+                s.branch_placements,
+                branch_bytes as f64 / 1e6,
+                s.cube_bytes as f64 / 1e6,
                 s.common.images,
                 s.common.tail()
             );

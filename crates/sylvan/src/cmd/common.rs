@@ -5,7 +5,7 @@ use glam::Vec3;
 use std::path::{Path, PathBuf};
 use sylvan_render::bake::CachePolicy;
 use sylvan_render::technique::boxtree::{BoxTreeParams, PlaneLayout};
-use sylvan_render::technique::hbt::{HbtParams, HbtProjection};
+use sylvan_render::technique::hbt::{HbtParams, HbtProjection, HbtShadows};
 use sylvan_render::{RenderOptions, TechniqueKind};
 use sylvan_scene::{Camera, Scene, Sun};
 
@@ -83,9 +83,27 @@ pub struct BakeArgs {
     /// hbt: billboard size in texels (MNP01 uses 32 or 64).
     #[arg(long, default_value_t = HbtParams::default().tile)]
     pub hbt_tile: u32,
-    /// hbt: hierarchy levels to bake, 1 (the tree) or 2 (also its main branches; not drawn yet).
+    /// hbt: hierarchy levels, 1 (the tree) or 2 (also main branches, drawn when the tree's texels would be magnified).
     #[arg(long, default_value_t = HbtParams::default().levels)]
     pub hbt_levels: u32,
+    /// hbt: view directions of the branch level's BTFs: 6, 18, 66 or 258.
+    #[arg(long, default_value_t = sylvan_render::directions::SAMPLE_COUNTS[HbtParams::default().branch_view_level as usize])]
+    pub hbt_branch_views: usize,
+    /// hbt: light directions of the branch level's BTFs: 6, 18, 66 or 258.
+    #[arg(long, default_value_t = sylvan_render::directions::SAMPLE_COUNTS[HbtParams::default().branch_light_level as usize])]
+    pub hbt_branch_lights: usize,
+    /// hbt: most distinct main branches baked per plant (others drawn with a scaled representative).
+    #[arg(long, default_value_t = HbtParams::default().max_branch_objects)]
+    pub hbt_branch_objects: u32,
+    /// hbt: visibility cube-map face size in texels (MNP01 §3.3 uses 32).
+    #[arg(long, default_value_t = HbtParams::default().cube_resolution)]
+    pub hbt_cube: u32,
+    /// hbt: a tree opens into its branches when one of its texels would cover more than this many pixels.
+    #[arg(long, default_value_t = HbtParams::default().open_texel_pixels)]
+    pub hbt_open_pixels: f32,
+    /// hbt: received sun shadows from `cubemaps` (MNP01 §3.3) or `cascades`.
+    #[arg(long, default_value = "cubemaps")]
+    pub hbt_shadows: String,
     /// hbt: projection of the blended images, `facing` or `cross` (MNP01 fig. 3.2).
     #[arg(long, default_value = "facing")]
     pub hbt_projection: String,
@@ -132,10 +150,22 @@ impl BakeArgs {
                 self.hbt_projection
             )
         })?;
+        let shadows = HbtShadows::parse(&self.hbt_shadows).ok_or_else(|| {
+            anyhow::anyhow!(
+                "--hbt-shadows {}: expected `cubemaps` or `cascades`",
+                self.hbt_shadows
+            )
+        })?;
         let p = HbtParams {
             levels: self.hbt_levels,
             view_level: level("hbt-views", self.hbt_views)?,
             light_level: level("hbt-lights", self.hbt_lights)?,
+            branch_view_level: level("hbt-branch-views", self.hbt_branch_views)?,
+            branch_light_level: level("hbt-branch-lights", self.hbt_branch_lights)?,
+            max_branch_objects: self.hbt_branch_objects,
+            cube_resolution: self.hbt_cube,
+            open_texel_pixels: self.hbt_open_pixels,
+            shadows,
             tile: self.hbt_tile,
             projection,
             ..Default::default()

@@ -52,6 +52,14 @@ pub struct Report {
     pub baked_bytes: u64,
     pub gpu_bytes: u64,
     pub bake_ms: f64,
+    /// `hbt`: CPU bytes of the visibility cube-maps, and milliseconds to build the scene's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub visibility_bytes: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub visibility_ms: Option<f64>,
+    /// `hbt`: trees drawn opened into their branches (last frame).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub trees_opened: Option<u32>,
     pub adapter: String,
     /// The camera path replayed (`bench --path`), as given.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -120,6 +128,10 @@ impl Report {
             baked_bytes: last.asset_bytes,
             gpu_bytes: last.gpu_bytes,
             bake_ms,
+            visibility_bytes: (last.visibility_bytes > 0).then_some(last.visibility_bytes),
+            visibility_ms: (last.visibility_bytes > 0).then_some(last.visibility_ms),
+            trees_opened: (last.visibility_bytes > 0 || last.trees_opened > 0)
+                .then_some(last.trees_opened),
             adapter,
             path: None,
             per_frame: None,

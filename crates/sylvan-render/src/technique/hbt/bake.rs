@@ -3,19 +3,22 @@
 //! weights.
 
 use super::HbtParams;
+use super::visibility;
 use crate::RenderError;
 use crate::bake::codec::{DecodeError, Decoder, Encoder, Fnv64};
 use crate::bake::image::TileImage;
 use crate::bake::views::PlaneFrame;
 use crate::bake::{BakeRequest, PlantBaker};
-use crate::directions::DirectionSet;
+use crate::directions::{DirectionLut, DirectionSet};
 use crate::technique::geometry::LEAF_TRANSLUCENCY;
-use glam::{Mat4, Vec3};
+use glam::{Affine3A, Mat4, Vec3};
 use sylvan_gpu::Gpu;
 use sylvan_plant::{Instancing, Mesh, Plant};
 
 /// Bumped whenever the payload below or the lighting baked into it changes.
-pub const FORMAT_VERSION: u32 = 2;
+pub const FORMAT_VERSION: u32 = 3;
+/// Largest visibility cube-map face side accepted.
+pub const MAX_CUBE_RESOLUTION: u32 = 64;
 
 /// Colour of light transmitted through a leaf, relative to its albedo (as the geometry).
 const TRANSMISSION_TINT: Vec3 = Vec3::new(1.1, 1.25, 0.55);
@@ -28,28 +31,52 @@ const BIAS_TEXELS: f32 = 1.5;
 /// RGBA8 (level 0 is `tile²`).
 pub type Mips = Vec<Vec<u8>>;
 
-/// The BTF of one base object of the plant's instancing (MNP01 §3.2: a level below the tree).
+/// Marks [`ObjectBtf::object`] for the plant's *rest*: the root's own wood and the leaves it
+/// places directly (everything the main branches leave out).
+pub const REST_OBJECT: u32 = u32::MAX;
+
+/// The BTF of one object of the level below the tree (MNP01 §3.2, §7: a main branch, or the
+/// rest of the plant).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ObjectBtf {
-    /// Index into `plant.instancing.objects`.
+    /// Index into `plant.instancing.objects`, or [`REST_OBJECT`].
     pub object: u32,
-    /// Times the plant's root places it.
+    /// Placements that draw it.
     pub uses: u32,
     /// The object's bounding box in its own frame.
     pub bbox_min: [f32; 3],
     /// Bounding box maximum.
     pub bbox_max: [f32; 3],
-    /// As [`HbtBaked::direct`].
+    /// As [`HbtBaked::direct`], over the branch direction sets.
     pub direct: Vec<Mips>,
-    /// As [`HbtBaked::ambient`] (sky occlusion estimated inside the object only).
+    /// As [`HbtBaked::ambient`] (sky occlusion estimated inside the object only; the rest of
+    /// the tree's is in the visibility cube-maps).
     pub ambient: Vec<Mips>,
 }
 
+/// Where the level below places one of its objects in the plant.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Placement {
+    /// Index into [`HbtBaked::objects`].
+    pub object: u32,
+    /// Object frame → plant frame, column-major 3×4 (a similarity).
+    pub transform: [f32; 12],
+}
+
+impl Placement {
+    /// The transform as an affine map.
+    pub fn affine(&self) -> Affine3A {
+        let t = &self.transform;
+        Affine3A::from_cols_array(t)
+    }
+}
+
 /// The baked BTFs of one plant: the top level of MNP01's hierarchy (the whole tree) and,
-/// when baked with two levels, its main branches.
+/// when baked with two levels, the level below — a few representative main branches and the
+/// rest of the plant, their placements, and each placement's visibility cube-maps.
 #[derive(Debug, Clone, PartialEq)]
 pub struct HbtBaked {
-    /// Billboard size in texels.
+    /// Billboard size in texels (both levels).
     pub tile: u32,
     /// View-direction set level.
     pub view_level: u32,
@@ -65,8 +92,20 @@ pub struct HbtBaked {
     /// `ambient[view]` (sky-facing part) then `ambient[views + view]` (ground-facing part) of
     /// the hemispherical sky term, with sky occlusion, for unit sky and ground colours.
     pub ambient: Vec<Mips>,
-    /// The level below (main branches; empty with one level). Baked, not drawn yet.
+    /// View-direction set level of the objects below.
+    pub branch_view_level: u32,
+    /// Light-direction set level of the objects below.
+    pub branch_light_level: u32,
+    /// The level below (empty with one level).
     pub objects: Vec<ObjectBtf>,
+    /// Their placements in the plant.
+    pub placements: Vec<Placement>,
+    /// Side of each visibility cube-map face.
+    pub cube_resolution: u32,
+    /// Per placement, per bounding-box corner ([`super::visibility::corner`]), a cube-map
+    /// (`6 · cube_resolution²` opacities, 255 = opaque) of the rest of the tree seen from it
+    /// (MNP01 §3.3 at the branch level).
+    pub cubes: Vec<u8>,
 }
 
 impl HbtBaked {
@@ -80,27 +119,41 @@ impl HbtBaked {
         crate::directions::SAMPLE_COUNTS[self.light_level as usize]
     }
 
-    /// Bytes of image data (all mips).
-    pub fn image_bytes(&self) -> u64 {
-        let objects = self
+    /// Bytes of one visibility cube-map.
+    pub fn cube_bytes(&self) -> usize {
+        visibility::FACES * (self.cube_resolution * self.cube_resolution) as usize
+    }
+
+    /// The cube-map of `placement` at bounding-box corner `corner`.
+    pub fn cube(&self, placement: usize, corner: usize) -> &[u8] {
+        let n = self.cube_bytes();
+        let at = (placement * visibility::CORNERS + corner) * n;
+        &self.cubes[at..at + n]
+    }
+
+    /// Bytes of image data (all mips), tree level then the level below.
+    pub fn image_bytes(&self) -> (u64, u64) {
+        let sum = |sets: &mut dyn Iterator<Item = &Mips>| -> u64 {
+            sets.flatten().map(|l| l.len() as u64).sum()
+        };
+        let objects = sum(&mut self
             .objects
             .iter()
-            .flat_map(|o| o.direct.iter().chain(&o.ambient));
-        self.direct
-            .iter()
-            .chain(&self.ambient)
-            .chain(objects)
-            .flatten()
-            .map(|l| l.len() as u64)
-            .sum()
+            .flat_map(|o| o.direct.iter().chain(&o.ambient)));
+        (sum(&mut self.direct.iter().chain(&self.ambient)), objects)
     }
 
     /// The payload written to the cache.
     pub fn encode(&self) -> Vec<u8> {
         let mut e = Encoder::default();
-        e.u32(self.tile);
-        e.u32(self.view_level);
-        e.u32(self.light_level);
+        e.u32s(&[
+            self.tile,
+            self.view_level,
+            self.light_level,
+            self.branch_view_level,
+            self.branch_light_level,
+            self.cube_resolution,
+        ]);
         e.f32s(&self.bbox_min);
         e.f32s(&self.bbox_max);
         encode_images(&mut e, &self.direct, &self.ambient);
@@ -111,6 +164,12 @@ impl HbtBaked {
             e.f32s(&o.bbox_max);
             encode_images(&mut e, &o.direct, &o.ambient);
         }
+        e.u64(self.placements.len() as u64);
+        for p in &self.placements {
+            e.u32(p.object);
+            e.f32s(&p.transform);
+        }
+        e.bytes(&self.cubes);
         e.buf
     }
 
@@ -118,17 +177,32 @@ impl HbtBaked {
     pub fn decode(bytes: &[u8]) -> Result<Self, DecodeError> {
         let bad = |m: String| DecodeError(m);
         let mut d = Decoder::new(bytes);
-        let tile = d.u32()?;
-        let view_level = d.u32()?;
-        let light_level = d.u32()?;
+        let head = d.u32s()?;
+        let [
+            tile,
+            view_level,
+            light_level,
+            branch_view_level,
+            branch_light_level,
+            cube_resolution,
+        ] = head[..]
+        else {
+            return Err(bad("header is not 6 integers".into()));
+        };
         if !tile.is_power_of_two() || !(1..=crate::bake::MAX_TILE).contains(&tile) {
             return Err(bad(format!("tile {tile} is not a power of two up to 1024")));
         }
         let max = crate::directions::MAX_LEVEL;
-        if view_level > max || light_level > max {
-            return Err(bad(format!(
-                "direction levels {view_level}/{light_level} (0–{max} allowed)"
-            )));
+        for (a, b) in [
+            (view_level, light_level),
+            (branch_view_level, branch_light_level),
+        ] {
+            if a > max || b > max {
+                return Err(bad(format!("direction levels {a}/{b} (0–{max} allowed)")));
+            }
+        }
+        if !(1..=MAX_CUBE_RESOLUTION).contains(&cube_resolution) {
+            return Err(bad(format!("cube-map resolution {cube_resolution}")));
         }
         let arr3 = |v: Vec<f32>| -> Result<[f32; 3], DecodeError> {
             v.try_into()
@@ -139,6 +213,10 @@ impl HbtBaked {
         let counts = crate::directions::SAMPLE_COUNTS;
         let (views, lights) = (counts[view_level as usize], counts[light_level as usize]);
         let (direct, ambient) = decode_images(&mut d, tile, views, lights)?;
+        let (bviews, blights) = (
+            counts[branch_view_level as usize],
+            counts[branch_light_level as usize],
+        );
         let nobjects = d.u64()?;
         // Each object takes at least its header and images; a huge count fails here.
         if nobjects > d.remaining() as u64 / 64 {
@@ -155,7 +233,7 @@ impl HbtBaked {
             };
             let bbox_min = arr3(d.f32s()?)?;
             let bbox_max = arr3(d.f32s()?)?;
-            let (direct, ambient) = decode_images(&mut d, tile, views, lights)?;
+            let (direct, ambient) = decode_images(&mut d, tile, bviews, blights)?;
             objects.push(ObjectBtf {
                 object,
                 uses,
@@ -164,6 +242,35 @@ impl HbtBaked {
                 direct,
                 ambient,
             });
+        }
+        let nplacements = d.u64()?;
+        if nplacements > d.remaining() as u64 / 56 {
+            return Err(bad(format!(
+                "{nplacements} placements in {} bytes",
+                d.remaining()
+            )));
+        }
+        let mut placements = Vec::with_capacity(nplacements as usize);
+        for i in 0..nplacements {
+            let object = d.u32()?;
+            let transform: [f32; 12] = d
+                .f32s()?
+                .try_into()
+                .map_err(|_| bad(format!("placement {i}: transform is not 12 floats")))?;
+            if object as u64 >= nobjects || transform.iter().any(|x| !x.is_finite()) {
+                return Err(bad(format!("placement {i}: bad object or transform")));
+            }
+            placements.push(Placement { object, transform });
+        }
+        let cubes = d.bytes()?.to_vec();
+        let per =
+            visibility::CORNERS * visibility::FACES * (cube_resolution * cube_resolution) as usize;
+        if cubes.len() != placements.len() * per {
+            return Err(bad(format!(
+                "{} cube-map bytes for {} placements",
+                cubes.len(),
+                placements.len()
+            )));
         }
         d.finish()?;
         Ok(Self {
@@ -174,7 +281,12 @@ impl HbtBaked {
             bbox_max,
             direct,
             ambient,
+            branch_view_level,
+            branch_light_level,
             objects,
+            placements,
+            cube_resolution,
+            cubes,
         })
     }
 }
@@ -244,6 +356,23 @@ pub fn input_hash(plant: &Plant, p: &HbtParams) -> u64 {
             p.levels,
         ])
         .f32s(&[LEAF_TRANSLUCENCY]);
+    if p.levels >= 2 {
+        h.u32s(&[
+            p.branch_view_level,
+            p.branch_light_level,
+            p.max_branch_objects,
+            p.cube_resolution,
+        ]);
+        // The level below depends on how the plant is instanced, not only on its triangles.
+        let inst = &plant.instancing;
+        h.u32s(&[inst.root, inst.objects.len() as u32]);
+        for o in &inst.objects {
+            h.u32s(&[o.level, o.uses, o.instances.len() as u32]);
+            for i in &o.instances {
+                h.u32s(&[i.object]).f32s(&i.transform.to_cols_array());
+            }
+        }
+    }
     for mesh in [&plant.wood, &plant.leaves] {
         h.f32s(bytemuck::cast_slice(&mesh.positions))
             .f32s(bytemuck::cast_slice(&mesh.normals))
@@ -571,9 +700,22 @@ pub fn main_branches(plant: &Plant) -> Vec<(u32, u32)> {
 }
 
 /// Base object `object` of `plant` expanded into a plant of its own (its frame, the plant's
-/// leaf texture), ready for the baker.
+/// leaf texture), ready for the baker. With `rest_only`, the object's own geometry and the
+/// leaves it places directly, without its branches (the plant's rest, for the root).
 pub fn object_plant(plant: &Plant, object: u32) -> Plant {
-    fn expand(inst: &Instancing, o: u32, m: &Mat4, wood: &mut Mesh, leaves: &mut Mesh, depth: u32) {
+    expand_object(plant, object, false)
+}
+
+fn expand_object(plant: &Plant, object: u32, rest_only: bool) -> Plant {
+    fn expand(
+        inst: &Instancing,
+        o: u32,
+        m: &Mat4,
+        wood: &mut Mesh,
+        leaves: &mut Mesh,
+        depth: u32,
+        rest: bool,
+    ) {
         let Some(obj) = inst.objects.get(o as usize) else {
             return;
         };
@@ -583,7 +725,22 @@ pub fn object_plant(plant: &Plant, object: u32) -> Plant {
         wood.append_transformed(&obj.wood, m);
         leaves.append_transformed(&obj.leaves, m);
         for i in &obj.instances {
-            expand(inst, i.object, &(*m * i.transform), wood, leaves, depth + 1);
+            let leaf = inst
+                .objects
+                .get(i.object as usize)
+                .is_some_and(|c| c.level == 0);
+            if rest && !leaf {
+                continue;
+            }
+            expand(
+                inst,
+                i.object,
+                &(*m * i.transform),
+                wood,
+                leaves,
+                depth + 1,
+                false,
+            );
         }
     }
     let (mut wood, mut leaves) = (Mesh::default(), Mesh::default());
@@ -594,6 +751,7 @@ pub fn object_plant(plant: &Plant, object: u32) -> Plant {
         &mut wood,
         &mut leaves,
         0,
+        rest_only,
     );
     let (mut min, mut max) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
     for p in wood.positions.iter().chain(&leaves.positions) {
@@ -603,8 +761,13 @@ pub fn object_plant(plant: &Plant, object: u32) -> Plant {
     if min.x > max.x {
         (min, max) = (Vec3::ZERO, Vec3::ZERO);
     }
+    let what = if rest_only {
+        "rest".to_string()
+    } else {
+        format!("object {object}")
+    };
     Plant {
-        name: format!("{} object {object}", plant.name),
+        name: format!("{} {what}", plant.name),
         leaf_count: leaves.indices.len() / 6,
         wood,
         leaves,
@@ -617,9 +780,164 @@ pub fn object_plant(plant: &Plant, object: u32) -> Plant {
     }
 }
 
-/// Bakes `plant`'s BTF (the top level) and, with `p.levels == 2`, the BTF of each main branch
-/// base object ([`main_branches`]). `progress(done, total)` counts rasterised views, light
-/// maps and lit views.
+/// The level below the tree as drawn: at most `max_objects` representative main branches plus
+/// the plant's rest, and where each is placed.
+pub struct BranchLevel {
+    /// (instancing object or [`REST_OBJECT`], the object as a plant, placements using it).
+    pub objects: Vec<(u32, Plant, u32)>,
+    /// (index into `objects`, object frame → plant frame).
+    pub placements: Vec<(u32, Mat4)>,
+}
+
+/// Chooses the level below the tree (MNP01 §3.2, §7). MNP01's pine is built from a handful of
+/// instanced main branches; an L-system tree has as many distinct main branches as its
+/// parameters vary (26 on the pine, 223 on the prunus), too many to bake a BTF each. So the
+/// distinct main branches are sorted by size and cut into at most `max_objects` groups of equal
+/// placement count; each group is drawn with its most used member, scaled by the ratio of
+/// bounding-box diagonals (about the branch base). The root's own wood and the leaves it places
+/// directly are one more object, the *rest*, placed at the identity.
+pub fn branch_level(plant: &Plant, max_objects: usize) -> BranchLevel {
+    let inst = &plant.instancing;
+    let main = main_branches(plant);
+    let diag = |p: &Plant| (Vec3::from(p.bbox_max) - Vec3::from(p.bbox_min)).length();
+    let mut distinct: Vec<(u32, u32, Plant)> = main
+        .iter()
+        .map(|&(o, uses)| (o, uses, object_plant(plant, o)))
+        .collect();
+    distinct.sort_by(|a, b| diag(&a.2).total_cmp(&diag(&b.2)));
+    let total: u32 = distinct.iter().map(|d| d.1).sum();
+    let groups = max_objects.max(1).min(distinct.len().max(1));
+    // group[i]: the group of distinct[i] (equal shares of the placements, in size order).
+    let mut group = Vec::with_capacity(distinct.len());
+    let mut seen = 0u32;
+    for d in &distinct {
+        let g = ((seen as u64 * groups as u64) / total.max(1) as u64) as usize;
+        group.push(g.min(groups - 1));
+        seen += d.1;
+    }
+    let mut objects: Vec<(u32, Plant, u32)> = Vec::new();
+    // Representative of each group: its most used member (largest on ties).
+    let mut rep_of_group = vec![usize::MAX; groups];
+    for (g, rep) in rep_of_group.iter_mut().enumerate() {
+        let best = (0..distinct.len())
+            .filter(|&i| group[i] == g)
+            .max_by_key(|&i| (distinct[i].1, i));
+        if let Some(i) = best {
+            *rep = objects.len();
+            objects.push((distinct[i].0, distinct[i].2.clone(), 0));
+        }
+    }
+    let mut placements = Vec::new();
+    if let Some(root) = inst.objects.get(inst.root as usize) {
+        for i in &root.instances {
+            let Some(k) = distinct.iter().position(|d| d.0 == i.object) else {
+                continue;
+            };
+            let r = rep_of_group[group[k]];
+            if r == usize::MAX {
+                continue;
+            }
+            let s = diag(&distinct[k].2) / diag(&objects[r].1).max(1e-6);
+            objects[r].2 += 1;
+            placements.push((r as u32, i.transform * Mat4::from_scale(Vec3::splat(s))));
+        }
+    }
+    let rest = expand_object(plant, inst.root, true);
+    if !rest.wood.indices.is_empty() || !rest.leaves.indices.is_empty() {
+        placements.push((objects.len() as u32, Mat4::IDENTITY));
+        objects.push((REST_OBJECT, rest, 1));
+    }
+    BranchLevel {
+        objects,
+        placements,
+    }
+}
+
+/// The coverage of an object's BTF for the visibility cube-maps: the alpha of its sky-facing
+/// ambient images, one per view sample.
+pub fn coverage<'a>(
+    lut: &'a DirectionLut,
+    ambient: &'a [Mips],
+    min: Vec3,
+    max: Vec3,
+    tile: u32,
+) -> visibility::Coverage<'a> {
+    let views = lut.set().len();
+    visibility::Coverage {
+        lut,
+        frames: lut
+            .set()
+            .directions()
+            .iter()
+            .map(|&d| view_frame(d, min, max, tile))
+            .collect(),
+        images: ambient[..views].iter().map(|m| m.as_slice()).collect(),
+        tile,
+        min,
+        max,
+    }
+}
+
+/// MNP01 §3.3 at the branch level: for each placement, the cube-maps at its box's 8 corners
+/// of the rest of the tree (the other placements).
+fn branch_cubes(
+    objects: &[ObjectBtf],
+    placements: &[Placement],
+    lut: &DirectionLut,
+    tile: u32,
+    res: usize,
+) -> Vec<u8> {
+    let covers: Vec<visibility::Coverage> = objects
+        .iter()
+        .map(|o| {
+            coverage(
+                lut,
+                &o.ambient,
+                Vec3::from(o.bbox_min),
+                Vec3::from(o.bbox_max),
+                tile,
+            )
+        })
+        .collect();
+    let occluders: Vec<visibility::Occluder> = placements
+        .iter()
+        .map(|p| visibility::Occluder::new(&covers[p.object as usize], p.affine()))
+        .collect();
+    let layout = visibility::CubeLayout::new(res);
+    let per = layout.dirs.len();
+    let mut out = vec![0u8; placements.len() * visibility::CORNERS * per];
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let chunk = (placements.len().div_ceil(threads)).max(1) * visibility::CORNERS * per;
+    std::thread::scope(|scope| {
+        for (c, part) in out.chunks_mut(chunk).enumerate() {
+            let (occluders, layout, covers) = (&occluders, &layout, &covers);
+            scope.spawn(move || {
+                let mut open = Vec::new();
+                let first = c * chunk / (visibility::CORNERS * per);
+                for (k, map) in part.chunks_mut(per).enumerate() {
+                    let (p, corner) = (first + k / visibility::CORNERS, k % visibility::CORNERS);
+                    let cov = &covers[placements[p].object as usize];
+                    let at = occluders[p]
+                        .to_frame
+                        .transform_point3(visibility::corner(cov.min, cov.max, corner));
+                    let others: Vec<&visibility::Occluder> = occluders
+                        .iter()
+                        .enumerate()
+                        .filter(|&(q, _)| q != p)
+                        .map(|(_, o)| o)
+                        .collect();
+                    visibility::render(at, &others, None, layout, &mut open, map);
+                }
+            });
+        }
+    });
+    out
+}
+
+/// Bakes `plant`'s BTF (the top level) and, with `p.levels == 2`, the level below
+/// ([`branch_level`]): each object's BTF over the branch direction sets, and each placement's
+/// visibility cube-maps. `progress(done, total)` counts rasterised views, light maps and lit
+/// views.
 pub fn bake(
     gpu: &Gpu,
     plant: &Plant,
@@ -630,30 +948,55 @@ pub fn bake(
     let option = |e: crate::directions::DirectionError| RenderError::Option(e.to_string());
     let views = DirectionSet::new(p.view_level).map_err(option)?;
     let lights = DirectionSet::new(p.light_level).map_err(option)?;
-    let branches = if p.levels >= 2 {
-        main_branches(plant)
+    let bviews = DirectionSet::new(p.branch_view_level).map_err(option)?;
+    let blights = DirectionSet::new(p.branch_light_level).map_err(option)?;
+    let level = if p.levels >= 2 {
+        branch_level(plant, p.max_branch_objects as usize)
     } else {
-        Vec::new()
+        BranchLevel {
+            objects: Vec::new(),
+            placements: Vec::new(),
+        }
     };
-    let per_object = 2 * views.len() + lights.len();
-    let total = per_object * (1 + branches.len());
+    let top = 2 * views.len() + lights.len();
+    let per_object = 2 * bviews.len() + blights.len();
+    let total = top + per_object * level.objects.len();
     let (direct, ambient) = bake_btf(gpu, plant, p, &views, &lights, &mut |d| progress(d, total))?;
-    let mut objects = Vec::with_capacity(branches.len());
-    for (k, &(object, uses)) in branches.iter().enumerate() {
-        let sub = object_plant(plant, object);
-        let done = per_object * (1 + k);
-        let (direct, ambient) = bake_btf(gpu, &sub, p, &views, &lights, &mut |d| {
+    let mut objects = Vec::with_capacity(level.objects.len());
+    for (k, (object, sub, uses)) in level.objects.iter().enumerate() {
+        let done = top + per_object * k;
+        let (direct, ambient) = bake_btf(gpu, sub, p, &bviews, &blights, &mut |d| {
             progress(done + d, total)
         })?;
         objects.push(ObjectBtf {
-            object,
-            uses,
+            object: *object,
+            uses: *uses,
             bbox_min: sub.bbox_min,
             bbox_max: sub.bbox_max,
             direct,
             ambient,
         });
     }
+    let placements: Vec<Placement> = level
+        .placements
+        .iter()
+        .map(|(o, m)| Placement {
+            object: *o,
+            transform: Affine3A::from_mat4(*m).to_cols_array(),
+        })
+        .collect();
+    let cubes = if placements.is_empty() {
+        Vec::new()
+    } else {
+        let lut = DirectionLut::new(&bviews, DirectionLut::DEFAULT_RESOLUTION).map_err(option)?;
+        branch_cubes(
+            &objects,
+            &placements,
+            &lut,
+            p.tile,
+            p.cube_resolution as usize,
+        )
+    };
     Ok(HbtBaked {
         tile: p.tile,
         view_level: p.view_level,
@@ -662,7 +1005,12 @@ pub fn bake(
         bbox_max: plant.bbox_max,
         direct,
         ambient,
+        branch_view_level: p.branch_view_level,
+        branch_light_level: p.branch_light_level,
         objects,
+        placements,
+        cube_resolution: p.cube_resolution,
+        cubes,
     })
 }
 
@@ -709,6 +1057,8 @@ mod tests {
             bbox_max: [1.0; 3],
             direct: vec![mips(8); 36],
             ambient: vec![mips(8); 12],
+            branch_view_level: 0,
+            branch_light_level: 0,
             objects: vec![ObjectBtf {
                 object: 3,
                 uses: 2,
@@ -717,6 +1067,12 @@ mod tests {
                 direct: vec![mips(8); 36],
                 ambient: vec![mips(8); 12],
             }],
+            placements: vec![Placement {
+                object: 0,
+                transform: Affine3A::IDENTITY.to_cols_array(),
+            }],
+            cube_resolution: 2,
+            cubes: vec![7; 8 * 6 * 4],
         };
         let bytes = b.encode();
         assert_eq!(HbtBaked::decode(&bytes).unwrap(), b);
@@ -726,6 +1082,12 @@ mod tests {
         assert!(HbtBaked::decode(&wrong.encode()).is_err());
         let mut wrong = b.clone();
         wrong.objects[0].ambient.pop();
+        assert!(HbtBaked::decode(&wrong.encode()).is_err());
+        let mut wrong = b.clone();
+        wrong.cubes.pop();
+        assert!(HbtBaked::decode(&wrong.encode()).is_err());
+        let mut wrong = b.clone();
+        wrong.placements[0].object = 1;
         assert!(HbtBaked::decode(&wrong.encode()).is_err());
     }
 }

@@ -2,26 +2,31 @@
 //! reconstruction weights (MNP01 §4.1), and the passes.
 
 use super::bake::{self as hb, HbtBaked};
-use super::{HbtParams, HbtProjection};
+use super::scene::{PlacedTree, SceneVisibility, trilinear};
+use super::visibility;
+use super::{HbtParams, HbtProjection, HbtShadows};
 use crate::RenderError;
 use crate::bake::codec::DecodeError;
 use crate::directions::{DirectionLut, DirectionSet};
 use crate::frame::{CASCADES, FrameResources};
+use crate::instances::Instances;
 use crate::pipeline::{self, PassKind, PipelineSpec};
 use crate::technique::common::{Growable, TileAtlas};
 use crate::technique::{DrawContext, DrawCounts, FrameInput, Representation};
 use bytemuck::{Pod, Zeroable};
-use glam::Vec3;
+use glam::{Affine3A, Vec3};
 use std::ops::Range;
 use sylvan_gpu::{Gpu, layout};
 use sylvan_plant::Plant;
+use sylvan_scene::Terrain;
 use wgpu::util::DeviceExt;
 
 const PASSES: usize = 1 + CASCADES;
 
+/// One image set (a tree's BTF, or an object's of the level below) as the shader sees it.
 #[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct GpuHbtSpecies {
+#[derive(Clone, Copy, Pod, Zeroable, PartialEq)]
+struct GpuHbtSet {
     min: [f32; 4],
     max: [f32; 4],
     info: [u32; 4],
@@ -43,19 +48,24 @@ struct GpuHbtAtlas {
     params: [f32; 4],
 }
 
-/// One tree as the `hbt` shader sees it (vertex locations 4–10, per instance).
+/// One billboard (a tree, or one object of an opened tree) as the `hbt` shader sees it
+/// (vertex locations 4–13, per instance).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable, Debug, PartialEq)]
 struct GpuHbtInstance {
-    base_scale: [f32; 4],
-    /// cos, sin, tint seed, presence.
-    rot: [f32; 4],
-    /// The 3 view samples; w: species.
+    /// Rows of the model → world affine map.
+    m: [[f32; 4]; 3],
+    /// The 3 view samples; w: image set.
     views: [u32; 4],
     /// The 3 light samples.
     lights: [u32; 4],
     /// Pair weights `w[3·view + light]`; the last 3 unused.
     weights: [f32; 12],
+    /// Sun transmittance at the 8 box corners (x: corners 0–3, y: 4–7, unorm8), then the sky
+    /// transmittance (z, w): the visibility cube-maps' levels combined (MNP01 §4.2).
+    vis: [u32; 4],
+    /// Tint seed, presence, uniform scale, world bounding radius.
+    extra: [f32; 4],
 }
 
 impl GpuHbtInstance {
@@ -63,21 +73,57 @@ impl GpuHbtInstance {
         array_stride: std::mem::size_of::<GpuHbtInstance>() as u64,
         step_mode: wgpu::VertexStepMode::Instance,
         attributes: &wgpu::vertex_attr_array![
-            4 => Float32x4, 5 => Float32x4, 6 => Uint32x4, 7 => Uint32x4,
-            8 => Float32x4, 9 => Float32x4, 10 => Float32x4
+            4 => Float32x4, 5 => Float32x4, 6 => Float32x4, 7 => Uint32x4, 8 => Uint32x4,
+            9 => Float32x4, 10 => Float32x4, 11 => Float32x4, 12 => Uint32x4, 13 => Float32x4
         ],
     };
 }
 
-/// The prepared MNP01 technique (top level).
+/// One placement of the level below, ready for the per-frame loop.
+struct PlacementDraw {
+    set: u32,
+    to_plant: Affine3A,
+    /// Linear part of plant → object (directions).
+    from_plant: glam::Mat3A,
+    scale: f32,
+    /// Object box centre (object space) and world radius per unit tree scale.
+    centre: Vec3,
+    radius: f32,
+    /// Corners in [0, 1]³ of the tree's box (for the top level's trilinear weights).
+    corners_in_tree: [Vec3; 8],
+    /// Sky transmittance at each corner from the rest of the tree.
+    sky: [f32; 8],
+    /// Index of the placement in its plant's baked cube-maps.
+    index: usize,
+}
+
+/// A distinct baked plant, ready to draw.
+struct PlantDraw {
+    tree_set: u32,
+    min: Vec3,
+    max: Vec3,
+    radius: f32,
+    /// Tree-level texel size per unit scale (model metres).
+    texel: f32,
+    placements: Vec<PlacementDraw>,
+    /// Its bake (for the branch-level cube-maps), shared with species using the same plant.
+    baked: HbtBaked,
+}
+
+/// The prepared MNP01 technique.
 pub struct Hbt {
     params: HbtParams,
-    /// MNP01 §4.1's direction → 3 samples tables (same results as `DirectionSet::nearest3`,
-    /// ~3× faster on the CPU).
+    /// MNP01 §4.1's direction → 3 samples tables of the tree level (same results as
+    /// `DirectionSet::nearest3`, ~3× faster on the CPU) and of the level below.
     views: DirectionLut,
     lights: DirectionLut,
-    /// Model-space bounding-box centre per species.
-    centres: Vec<Vec3>,
+    branch_views: DirectionLut,
+    branch_lights: DirectionLut,
+    plants: Vec<PlantDraw>,
+    /// Species → index into `plants`.
+    species_plant: Vec<usize>,
+    /// The top level's cube-maps (after [`Hbt::place`]).
+    scene: Option<SceneVisibility>,
     pipeline: wgpu::RenderPipeline,
     shadow_pipeline: wgpu::RenderPipeline,
     bind: wgpu::BindGroup,
@@ -87,12 +133,111 @@ pub struct Hbt {
     staging: Vec<GpuHbtInstance>,
     sort: Vec<(f32, GpuHbtInstance)>,
     ranges: [Range<u32>; PASSES],
+    opened: u32,
 }
 
 impl Hbt {
     /// Instance-buffer re-allocations so far.
     pub fn reallocations(&self) -> u32 {
         self.instances.reallocations
+    }
+
+    /// Trees drawn opened into the level below in the last frame (fully or in transition).
+    pub fn opened(&self) -> u32 {
+        self.opened
+    }
+
+    /// Bytes of the visibility structure: the scene's cube-maps (CPU) and the plants' branch
+    /// level cube-maps.
+    pub fn visibility_bytes(&self) -> u64 {
+        self.scene.as_ref().map_or(0, SceneVisibility::bytes)
+            + self
+                .plants
+                .iter()
+                .map(|p| p.baked.cubes.len() as u64)
+                .sum::<u64>()
+    }
+
+    /// Milliseconds the last [`Hbt::place`] took to build the scene's cube-maps.
+    pub fn visibility_build_ms(&self) -> f64 {
+        self.scene.as_ref().map_or(0.0, |s| s.build_ms)
+    }
+
+    /// MNP01 §3.3's top level: builds every placed tree's visibility cube-maps against the
+    /// other trees and `terrain` (with [`HbtShadows::CubeMaps`]; otherwise nothing).
+    pub fn place(&mut self, instances: &Instances, terrain: Option<&Terrain>) {
+        if self.params.shadows != HbtShadows::CubeMaps {
+            self.scene = None;
+            return;
+        }
+        let trees: Vec<PlacedTree> = instances
+            .placed_trees()
+            .filter(|(s, _)| *s < self.species_plant.len())
+            .map(|(s, r)| PlacedTree::from_record(s, r.base_scale, r.rot))
+            .collect();
+        let covers: Vec<_> = self
+            .species_plant
+            .iter()
+            .map(|&p| {
+                let b = &self.plants[p].baked;
+                hb::coverage(
+                    &self.views,
+                    &b.ambient,
+                    Vec3::from(b.bbox_min),
+                    Vec3::from(b.bbox_max),
+                    b.tile,
+                )
+            })
+            .collect();
+        self.scene = Some(SceneVisibility::build(
+            &trees,
+            &covers,
+            terrain,
+            self.params.cube_resolution as usize,
+        ));
+    }
+}
+
+/// Where prepared image sets go: their shader records, sample frames and atlas tiles.
+struct SetSink<'s, 'a> {
+    sets: &'s mut Vec<GpuHbtSet>,
+    frames: &'s mut Vec<GpuSampleFrame>,
+    tiles: &'s mut Vec<&'a [Vec<u8>]>,
+    tile: u32,
+}
+
+impl<'a> SetSink<'_, 'a> {
+    /// Adds one image set (views `dirs`, `lights` light samples, framing `bbox`); returns its
+    /// index.
+    fn add(
+        &mut self,
+        dirs: &DirectionSet,
+        lights: usize,
+        bbox: (Vec3, Vec3),
+        direct: &'a [Vec<Vec<u8>>],
+        ambient: &'a [Vec<Vec<u8>>],
+    ) -> u32 {
+        let (min, max) = bbox;
+        let first_frame = self.frames.len() as u32;
+        for &d in dirs.directions() {
+            let f = hb::view_frame(d, min, max, self.tile);
+            self.frames.push(GpuSampleFrame {
+                u: f.u.extend(f.half.x).to_array(),
+                v: f.v.extend(f.half.y).to_array(),
+                f: f.f.extend(f.half.z).to_array(),
+            });
+        }
+        let first_tile = self.tiles.len() as u32;
+        self.tiles.extend(direct.iter().map(|m| m.as_slice()));
+        self.tiles.extend(ambient.iter().map(|m| m.as_slice()));
+        let (nv, nl) = (dirs.len() as u32, lights as u32);
+        self.sets.push(GpuHbtSet {
+            min: min.extend((max - min).length() * 0.5).to_array(),
+            max: max.extend(0.0).to_array(),
+            info: [first_tile, nl, first_tile + nv * nl, first_frame],
+            counts: [nv, 0, 0, 0],
+        });
+        self.sets.len() as u32 - 1
     }
 }
 
@@ -101,8 +246,64 @@ fn to_model_dir(d: Vec3, c: f32, s: f32) -> Vec3 {
     Vec3::new(c * d.x - s * d.z, d.y, s * d.x + c * d.z)
 }
 
-fn to_world_dir(d: Vec3, c: f32, s: f32) -> Vec3 {
-    Vec3::new(c * d.x + s * d.z, d.y, -s * d.x + c * d.z)
+fn pack_unorm(v: [f32; 4]) -> u32 {
+    v.iter().enumerate().fold(0u32, |acc, (k, x)| {
+        acc | (((x.clamp(0.0, 1.0) * 255.0).round() as u32) << (8 * k))
+    })
+}
+
+fn pack8(v: [f32; 8]) -> [u32; 2] {
+    [
+        pack_unorm([v[0], v[1], v[2], v[3]]),
+        pack_unorm([v[4], v[5], v[6], v[7]]),
+    ]
+}
+
+fn unit8(v: [u8; 8]) -> [f32; 8] {
+    v.map(|x| x as f32 / 255.0)
+}
+
+fn smoothstep(e0: f32, e1: f32, x: f32) -> f32 {
+    if e1 <= e0 {
+        return if x >= e0 { 1.0 } else { 0.0 };
+    }
+    let t = ((x - e0) / (e1 - e0)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// One billboard record: `to_world` (a similarity), image set `set`, view and light look-ups
+/// (model space), visibility and presence.
+#[allow(clippy::too_many_arguments)]
+fn billboard(
+    to_world: &Affine3A,
+    set: u32,
+    views: ([u32; 3], [f32; 3]),
+    lights: ([u32; 3], [f32; 3]),
+    min_weight: f32,
+    vis: ([f32; 8], [f32; 8]),
+    tint: f32,
+    presence: f32,
+    scale: f32,
+    radius: f32,
+) -> GpuHbtInstance {
+    let m = to_world.matrix3;
+    let t = to_world.translation;
+    let w = hb::reconstruction_weights(views.1, lights.1, min_weight);
+    let mut weights = [0.0; 12];
+    weights[..9].copy_from_slice(&w);
+    let (sun, sky) = (pack8(vis.0), pack8(vis.1));
+    GpuHbtInstance {
+        m: [
+            [m.x_axis.x, m.y_axis.x, m.z_axis.x, t.x],
+            [m.x_axis.y, m.y_axis.y, m.z_axis.y, t.y],
+            [m.x_axis.z, m.y_axis.z, m.z_axis.z, t.z],
+        ],
+        views: [views.0[0], views.0[1], views.0[2], set],
+        lights: [lights.0[0], lights.0[1], lights.0[2], 0],
+        weights,
+        vis: [sun[0], sun[1], sky[0], sky[1]],
+        extra: [tint, presence, scale, radius],
+    }
 }
 
 impl Representation for Hbt {
@@ -150,53 +351,95 @@ impl Representation for Hbt {
         let option = |e: crate::directions::DirectionError| RenderError::Option(e.to_string());
         let views = DirectionSet::new(params.view_level).map_err(option)?;
         let lights = DirectionSet::new(params.light_level).map_err(option)?;
-        let (nv, nl) = (views.len() as u32, lights.len() as u32);
+        let bviews = DirectionSet::new(params.branch_view_level).map_err(option)?;
+        let blights = DirectionSet::new(params.branch_light_level).map_err(option)?;
         let tile = params.tile;
-        let mut gpu_species = Vec::with_capacity(plants.len());
+        let mut sets: Vec<GpuHbtSet> = Vec::new();
         let mut frames = Vec::new();
         let mut tiles: Vec<&[Vec<u8>]> = Vec::new();
-        let mut centres = Vec::with_capacity(plants.len());
-        for (s, (plant, b)) in plants.iter().zip(baked).enumerate() {
-            if b.tile != tile
-                || b.view_level != params.view_level
-                || b.light_level != params.light_level
-            {
+        let mut plant_draws: Vec<PlantDraw> = Vec::new();
+        let mut species_plant = Vec::with_capacity(plants.len());
+        for (plant, b) in plants.iter().zip(baked) {
+            let matches = b.tile == tile
+                && b.view_level == params.view_level
+                && b.light_level == params.light_level
+                // A plant without an instancing hierarchy has no level below: trees only.
+                && (params.levels < 2
+                    || b.objects.is_empty()
+                    || (b.branch_view_level == params.branch_view_level
+                        && b.branch_light_level == params.branch_light_level
+                        && b.cube_resolution == params.cube_resolution));
+            if !matches {
                 return Err(RenderError::Plant(format!(
-                    "{}: baked BTF does not match the parameters (tile {} vs {tile}, levels {}/{} vs {}/{}) — re-bake",
+                    "{}: baked BTF does not match the parameters (tile {} vs {tile}, levels {}/{} vs {}/{}, {} objects below) — re-bake",
                     plant.name,
                     b.tile,
                     b.view_level,
                     b.light_level,
                     params.view_level,
-                    params.light_level
+                    params.light_level,
+                    b.objects.len()
                 )));
             }
-            let (min, max) = (Vec3::from(b.bbox_min), Vec3::from(b.bbox_max));
             // Species sharing a plant share its images (the bake gives them equal assets).
-            if let Some(same) = baked[..s].iter().position(|o| o == b) {
-                gpu_species.push(gpu_species[same]);
-                centres.push(centres[same]);
+            if let Some(same) = plant_draws.iter().position(|p| &p.baked == b) {
+                species_plant.push(same);
                 continue;
             }
-            let first_frame = frames.len() as u32;
-            for &d in views.directions() {
-                let f = hb::view_frame(d, min, max, tile);
-                frames.push(GpuSampleFrame {
-                    u: f.u.extend(f.half.x).to_array(),
-                    v: f.v.extend(f.half.y).to_array(),
-                    f: f.f.extend(f.half.z).to_array(),
-                });
+            let (min, max) = (Vec3::from(b.bbox_min), Vec3::from(b.bbox_max));
+            let mut out = SetSink {
+                sets: &mut sets,
+                frames: &mut frames,
+                tiles: &mut tiles,
+                tile,
+            };
+            let tree_set = out.add(&views, lights.len(), (min, max), &b.direct, &b.ambient);
+            let mut placements = Vec::new();
+            if params.levels >= 2 {
+                let object_sets: Vec<u32> = b
+                    .objects
+                    .iter()
+                    .map(|o| {
+                        let bbox = (Vec3::from(o.bbox_min), Vec3::from(o.bbox_max));
+                        out.add(&bviews, blights.len(), bbox, &o.direct, &o.ambient)
+                    })
+                    .collect();
+                let dirs = visibility::directions(b.cube_resolution as usize);
+                for (index, pl) in b.placements.iter().enumerate() {
+                    let o = &b.objects[pl.object as usize];
+                    let (omin, omax) = (Vec3::from(o.bbox_min), Vec3::from(o.bbox_max));
+                    let to_plant = pl.affine();
+                    let mut corners_in_tree = [Vec3::ZERO; 8];
+                    let mut sky = [1.0; 8];
+                    for k in 0..visibility::CORNERS {
+                        let c = to_plant.transform_point3(visibility::corner(omin, omax, k));
+                        corners_in_tree[k] = (c - min) / (max - min).max(Vec3::splat(1e-6));
+                        sky[k] = visibility::sky_transmittance(b.cube(index, k), &dirs);
+                    }
+                    let scale = to_plant.matrix3.x_axis.length();
+                    placements.push(PlacementDraw {
+                        set: object_sets[pl.object as usize],
+                        to_plant,
+                        from_plant: to_plant.matrix3.inverse(),
+                        scale,
+                        centre: (omin + omax) * 0.5,
+                        radius: (omax - omin).length() * 0.5 * scale,
+                        corners_in_tree,
+                        sky,
+                        index,
+                    });
+                }
             }
-            let first_tile = tiles.len() as u32;
-            tiles.extend(b.direct.iter().map(|m| m.as_slice()));
-            tiles.extend(b.ambient.iter().map(|m| m.as_slice()));
-            gpu_species.push(GpuHbtSpecies {
-                min: min.extend((max - min).length() * 0.5).to_array(),
-                max: max.extend(0.0).to_array(),
-                info: [first_tile, nl, first_tile + nv * nl, first_frame],
-                counts: [nv, 0, 0, 0],
+            species_plant.push(plant_draws.len());
+            plant_draws.push(PlantDraw {
+                tree_set,
+                min,
+                max,
+                radius: (max - min).length() * 0.5,
+                texel: 2.0 * (max - min).max_element() * 0.5 / tile as f32,
+                placements,
+                baked: b.clone(),
             });
-            centres.push((min + max) * 0.5);
         }
         let device = &gpu.device;
         let atlas = TileAtlas::upload(
@@ -216,7 +459,7 @@ impl Representation for Hbt {
             params: [
                 1.0 / atlas.per_row as f32,
                 1.0 / atlas.rows as f32,
-                0.0,
+                (params.shadows == HbtShadows::Cascades) as u32 as f32,
                 0.0,
             ],
         };
@@ -227,7 +470,7 @@ impl Representation for Hbt {
                 usage: wgpu::BufferUsages::STORAGE,
             })
         };
-        let species_buffer = storage("hbt_species", bytemuck::cast_slice(&gpu_species));
+        let species_buffer = storage("hbt_sets", bytemuck::cast_slice(&sets));
         let frame_buffer = storage("hbt_frames", bytemuck::cast_slice(&frames));
         let atlas_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("hbt_atlas_params"),
@@ -346,7 +589,13 @@ impl Representation for Hbt {
             params: params.clone(),
             views: DirectionLut::new(&views, DirectionLut::DEFAULT_RESOLUTION).map_err(option)?,
             lights: DirectionLut::new(&lights, DirectionLut::DEFAULT_RESOLUTION).map_err(option)?,
-            centres,
+            branch_views: DirectionLut::new(&bviews, DirectionLut::DEFAULT_RESOLUTION)
+                .map_err(option)?,
+            branch_lights: DirectionLut::new(&blights, DirectionLut::DEFAULT_RESOLUTION)
+                .map_err(option)?,
+            plants: plant_draws,
+            species_plant,
+            scene: None,
             pipeline: main,
             shadow_pipeline: shadow,
             bind,
@@ -355,53 +604,141 @@ impl Representation for Hbt {
             staging: Vec::new(),
             sort: Vec::new(),
             ranges: std::array::from_fn(|_| 0..0),
+            opened: 0,
         })
     }
 
     fn update(&mut self, gpu: &Gpu, input: &FrameInput<'_>) -> Result<(), RenderError> {
         self.staging.clear();
+        self.opened = 0;
         let sun = input.sun_dir;
         let light = self
             .params
             .fixed_light
             .map_or(sun, |l| Vec3::from(l).normalize());
+        if let Some(scene) = &mut self.scene {
+            scene.set_sun(sun);
+        }
+        let p = &self.params;
+        let open_px = p.open_texel_pixels;
+        let (lo_px, hi_px) = (open_px * (1.0 - p.band), open_px * (1.0 + p.band));
         for pass in 0..PASSES {
             self.sort.clear();
-            for (s, centre) in self.centres.iter().enumerate() {
-                for rec in input.instances.records(pass, s) {
-                    let (c, sn) = (rec.rot[0], rec.rot[1]);
-                    let base = Vec3::new(rec.base_scale[0], rec.base_scale[1], rec.base_scale[2]);
-                    let world_centre = base + to_world_dir(*centre * rec.base_scale[3], c, sn);
-                    let mut inst = GpuHbtInstance {
-                        base_scale: rec.base_scale,
-                        rot: rec.rot,
-                        views: [0, 0, 0, s as u32],
-                        lights: [0; 4],
-                        weights: [0.0; 12],
-                    };
+            for (s, &pi) in self.species_plant.iter().enumerate() {
+                let plant = &self.plants[pi];
+                let records = input.instances.records(pass, s);
+                let ids = input.instances.ids(pass, s);
+                for (rec, &id) in records.iter().zip(ids) {
+                    let (c, sn, scale) = (rec.rot[0], rec.rot[1], rec.base_scale[3]);
+                    let tree = PlacedTree::from_record(s, rec.base_scale, rec.rot);
+                    let world_centre = tree
+                        .to_world
+                        .transform_point3((plant.min + plant.max) * 0.5);
                     let eye = input.eye - world_centre;
-                    if pass == 0 {
-                        // MNP01 §4.1: 3 view × 3 light samples, products of barycentrics.
-                        let (v, vw) = self.views.lookup(to_model_dir(eye, c, sn));
-                        let (l, lw) = self.lights.lookup(to_model_dir(light, c, sn));
-                        let w = hb::reconstruction_weights(vw, lw, self.params.min_weight);
-                        inst.views[..3].copy_from_slice(&v);
-                        inst.lights[..3].copy_from_slice(&l);
-                        inst.weights[..9].copy_from_slice(&w);
-                    } else {
+                    let presence = rec.rot[3];
+                    if pass > 0 {
                         // Shadow casters are seen from the sun: only coverage matters, so the
                         // view weights go in the first column.
                         let (v, vw) = self.views.lookup(to_model_dir(sun, c, sn));
-                        inst.views[..3].copy_from_slice(&v);
+                        let mut inst = billboard(
+                            &tree.to_world,
+                            plant.tree_set,
+                            (v, vw),
+                            ([0; 3], [1.0, 0.0, 0.0]),
+                            0.0,
+                            ([1.0; 8], [1.0; 8]),
+                            rec.rot[2],
+                            presence,
+                            scale,
+                            plant.radius * scale,
+                        );
+                        inst.weights = [0.0; 12];
                         for (i, w) in vw.iter().enumerate() {
                             inst.weights[3 * i] = *w;
                         }
+                        self.sort.push((0.0, inst));
+                        continue;
                     }
-                    self.sort.push((eye.length_squared(), inst));
+                    // MNP01 §4: open the tree when its texels would be magnified.
+                    let dist = eye.length().max(1e-3);
+                    let texel_px = plant.texel * scale * input.pixels_per_metre / dist;
+                    let open = if plant.placements.is_empty() {
+                        0.0
+                    } else {
+                        smoothstep(lo_px, hi_px, texel_px)
+                    };
+                    let (tree_sun, tree_sky) = match &self.scene {
+                        Some(sc) => (unit8(sc.sun(id as usize)), unit8(sc.sky(id as usize))),
+                        None => ([1.0; 8], [1.0; 8]),
+                    };
+                    let light_model = to_model_dir(light, c, sn);
+                    if (1.0 - open) * presence > 0.002 {
+                        // MNP01 §4.1: 3 view × 3 light samples, products of barycentrics.
+                        let inst = billboard(
+                            &tree.to_world,
+                            plant.tree_set,
+                            self.views.lookup(to_model_dir(eye, c, sn)),
+                            self.lights.lookup(light_model),
+                            p.min_weight,
+                            (tree_sun, tree_sky),
+                            rec.rot[2],
+                            (1.0 - open) * presence,
+                            scale,
+                            plant.radius * scale,
+                        );
+                        self.sort.push((eye.length_squared(), inst));
+                    }
+                    if open * presence <= 0.002 {
+                        continue;
+                    }
+                    self.opened += 1;
+                    let sun_model = to_model_dir(sun, c, sn);
+                    let res = plant.baked.cube_resolution as usize;
+                    for pl in &plant.placements {
+                        let to_world = tree.to_world * pl.to_plant;
+                        let centre = to_world.transform_point3(pl.centre);
+                        let eye_o = input.eye - centre;
+                        let in_object = |d: Vec3| (pl.from_plant * d).normalize_or(Vec3::Y);
+                        let mut sun_vis = [1.0; 8];
+                        let mut sky_vis = [1.0; 8];
+                        for k in 0..visibility::CORNERS {
+                            let q = pl.corners_in_tree[k];
+                            let branch = match p.shadows {
+                                HbtShadows::CubeMaps => {
+                                    1.0 - visibility::lookup(
+                                        plant.baked.cube(pl.index, k),
+                                        res,
+                                        sun_model,
+                                    )
+                                }
+                                HbtShadows::Cascades => 1.0,
+                            };
+                            // MNP01 §4.2: levels combine as 1 − Π(1 − opacity).
+                            sun_vis[k] = branch * trilinear(tree_sun, q);
+                            sky_vis[k] = match p.shadows {
+                                HbtShadows::CubeMaps => pl.sky[k] * trilinear(tree_sky, q),
+                                HbtShadows::Cascades => 1.0,
+                            };
+                        }
+                        let inst = billboard(
+                            &to_world,
+                            pl.set,
+                            self.branch_views
+                                .lookup(in_object(to_model_dir(eye_o, c, sn))),
+                            self.branch_lights.lookup(in_object(light_model)),
+                            p.min_weight,
+                            (sun_vis, sky_vis),
+                            rec.rot[2],
+                            open * presence,
+                            scale * pl.scale,
+                            pl.radius * scale,
+                        );
+                        self.sort.push((eye_o.length_squared(), inst));
+                    }
                 }
             }
             if pass == 0 {
-                // Back to front: blending needs the far trees first.
+                // MNP01 §5: back to front (trees and the objects of opened trees together).
                 self.sort.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
             }
             let start = self.staging.len() as u32;

@@ -1,8 +1,10 @@
-// Technique `hbt` (MNP01 §4.1, appendix): per tree, the 9 BTF images of the 3 view samples × 3
-// light samples enclosing the eye and sun directions, summed with their weights in one
-// fragment, plus the 3 ambient images; composited premultiplied over the background.
+// Technique `hbt` (MNP01 §4.1, §4.2, appendix): per billboard (a tree, or an object of an
+// opened tree), the 9 BTF images of the 3 view samples × 3 light samples enclosing the eye and
+// sun directions, summed with their weights in one fragment, plus the 3 ambient images; lit by
+// the sun times the visibility cube-maps' transmittance (interpolated from the box's 8
+// corners) and the sky times their sky term; composited premultiplied over the background.
 
-struct HbtSpecies {
+struct HbtSet {
     // xyz: plant bounding box minimum (model space); w: bounding-sphere radius.
     min: vec4<f32>,
     // xyz: maximum.
@@ -26,11 +28,12 @@ struct SampleFrame {
 struct HbtAtlas {
     // x: tile texels; y: tiles per row; z: tiles per layer; w: 1 for cross projection.
     tiles: vec4<u32>,
-    // x: 1 / tiles per row; y: 1 / rows of tiles; z, w: unused.
+    // x: 1 / tiles per row; y: 1 / rows of tiles; z: 1 when received shadows come from the
+    // cascades instead of the cube-maps; w: unused.
     params: vec4<f32>,
 };
 
-@group(1) @binding(0) var<storage, read> species_info: array<HbtSpecies>;
+@group(1) @binding(0) var<storage, read> species_info: array<HbtSet>;
 @group(1) @binding(1) var<storage, read> frames: array<SampleFrame>;
 @group(1) @binding(2) var atlas_color: texture_2d_array<f32>;
 @group(1) @binding(3) var atlas_sampler: sampler;
@@ -38,18 +41,22 @@ struct HbtAtlas {
 
 struct HbtIn {
     @builtin(vertex_index) vertex: u32,
-    // xyz trunk base, w uniform scale.
-    @location(4) base_scale: vec4<f32>,
-    // x cos(rotation), y sin(rotation), z tint seed, w presence.
-    @location(5) rot: vec4<f32>,
-    // xyz: the 3 view samples; w: species.
-    @location(6) views: vec4<u32>,
+    // Rows of the model → world affine map (a similarity).
+    @location(4) m0: vec4<f32>,
+    @location(5) m1: vec4<f32>,
+    @location(6) m2: vec4<f32>,
+    // xyz: the 3 view samples; w: image set.
+    @location(7) views: vec4<u32>,
     // xyz: the 3 light samples.
-    @location(7) lights: vec4<u32>,
+    @location(8) lights: vec4<u32>,
     // Pair weights w[3·view + light], row-major.
-    @location(8) w0: vec4<f32>,
-    @location(9) w1: vec4<f32>,
-    @location(10) w2: vec4<f32>,
+    @location(9) w0: vec4<f32>,
+    @location(10) w1: vec4<f32>,
+    @location(11) w2: vec4<f32>,
+    // Sun (xy) and sky (zw) transmittance at the box's 8 corners, unorm8 × 4 each.
+    @location(12) vis: vec4<u32>,
+    // x tint seed, y presence, z uniform scale, w world bounding radius.
+    @location(13) extra: vec4<f32>,
 };
 
 struct HbtOut {
@@ -64,21 +71,32 @@ struct HbtOut {
     @location(6) @interpolate(flat) w2: vec4<f32>,
     // x: first view row, y: end row (cross: one row per quad); z: unused.
     @location(7) @interpolate(flat) rows: vec4<u32>,
-    // x: tint seed; y: presence; z: uniform scale.
+    // x: tint seed; y: presence; z: uniform scale; w: world bounding radius.
     @location(8) @interpolate(flat) extra: vec4<f32>,
     // Mip level: log2 of (a pixel's footprint on the quad / a texel), computed per vertex
     // (implicit derivatives are wrong along triangle edges on llvmpipe; see boxtree).
     @location(9) lod: f32,
+    @location(10) @interpolate(flat) vis: vec4<u32>,
 };
 
-fn hbt_to_world(p: vec3<f32>, base_scale: vec4<f32>, rot: vec4<f32>) -> vec3<f32> {
-    let q = p * base_scale.w;
-    return vec3<f32>(rot.x * q.x + rot.y * q.z, q.y, -rot.y * q.x + rot.x * q.z) + base_scale.xyz;
+fn hbt_to_world(p: vec3<f32>, in: HbtIn) -> vec3<f32> {
+    let q = vec4<f32>(p, 1.0);
+    return vec3<f32>(dot(in.m0, q), dot(in.m1, q), dot(in.m2, q));
 }
 
-// World direction → model space (inverse rotation about Y).
-fn hbt_to_model_dir(d: vec3<f32>, rot: vec4<f32>) -> vec3<f32> {
-    return vec3<f32>(rot.x * d.x - rot.y * d.z, d.y, rot.y * d.x + rot.x * d.z);
+// World direction → model space, up to scale (the transpose of a similarity's linear part).
+fn hbt_to_model_dir(d: vec3<f32>, in: HbtIn) -> vec3<f32> {
+    return in.m0.xyz * d.x + in.m1.xyz * d.y + in.m2.xyz * d.z;
+}
+
+// Trilinear interpolation of 8 unorm8 corner values (corner k: bit 0 x, bit 1 y, bit 2 z).
+fn corners8(lo: u32, hi: u32, q: vec3<f32>) -> f32 {
+    let a = unpack4x8unorm(lo);
+    let b = unpack4x8unorm(hi);
+    let y0 = mix(vec2<f32>(a.x, b.x), vec2<f32>(a.y, b.y), q.x);
+    let y1 = mix(vec2<f32>(a.z, b.z), vec2<f32>(a.w, b.w), q.x);
+    let z = mix(y0, y1, q.y);
+    return mix(z.x, z.y, q.z);
 }
 
 fn pair_weight(in: HbtOut, k: u32) -> f32 {
@@ -133,9 +151,9 @@ fn hbt_vertex(in: HbtIn, toward_world: vec3<f32>, view_proj: mat4x4<f32>, is_dir
         }
         var toward = toward_world;
         if (!is_dir) {
-            toward = toward_world - hbt_to_world(centre, in.base_scale, in.rot);
+            toward = toward_world - hbt_to_world(centre, in);
         }
-        let f = normalize(hbt_to_model_dir(toward, in.rot));
+        let f = normalize(hbt_to_model_dir(toward, in));
         let up = select(vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 1.0, 0.0), abs(f.y) < 0.99);
         v = normalize(up - f * dot(up, f));
         u = cross(v, f);
@@ -149,7 +167,7 @@ fn hbt_vertex(in: HbtIn, toward_world: vec3<f32>, view_proj: mat4x4<f32>, is_dir
         vec2<f32>(0.0, 1.0), vec2<f32>(1.0, 0.0), vec2<f32>(0.0, 0.0),
     )[corner];
     let model = centre + u * ((2.0 * st.x - 1.0) * hu) + v * ((1.0 - 2.0 * st.y) * hv);
-    let world = hbt_to_world(model, in.base_scale, in.rot);
+    let world = hbt_to_world(model, in);
     var out: HbtOut;
     out.pos = view_proj * vec4<f32>(world, 1.0);
     out.world = world;
@@ -160,9 +178,10 @@ fn hbt_vertex(in: HbtIn, toward_world: vec3<f32>, view_proj: mat4x4<f32>, is_dir
     out.w1 = in.w1;
     out.w2 = in.w2;
     out.rows = rows;
-    out.extra = vec4<f32>(in.rot.z, in.rot.w, in.base_scale.w, 0.0);
+    out.extra = in.extra;
+    out.vis = in.vis;
     // A texel is 2·half/tile metres of the image framing the box (≈ the quad's extent).
-    let texel_m = 2.0 * max(dot(abs(u), h), dot(abs(v), h)) * in.base_scale.w / f32(atlas.tiles.x);
+    let texel_m = 2.0 * max(dot(abs(u), h), dot(abs(v), h)) * in.extra.z / f32(atlas.tiles.x);
     var pixel_m = 0.0;
     if (is_dir) {
         // Shadow maps: orthographic, one texel per shadow-map texel.
@@ -177,7 +196,7 @@ fn hbt_vertex(in: HbtIn, toward_world: vec3<f32>, view_proj: mat4x4<f32>, is_dir
 
 // Image coordinates of a model-space point in view sample `view`'s frame; outside [0, 1]²
 // the image is empty.
-fn sample_uv(sp: HbtSpecies, view: u32, model: vec3<f32>) -> vec2<f32> {
+fn sample_uv(sp: HbtSet, view: u32, model: vec3<f32>) -> vec2<f32> {
     let fr = frames[sp.info.w + view];
     let q = model - (sp.min.xyz + sp.max.xyz) * 0.5;
     return vec2<f32>(dot(q, fr.u.xyz) / fr.u.w * 0.5 + 0.5, 0.5 - dot(q, fr.v.xyz) / fr.v.w * 0.5);
@@ -248,14 +267,23 @@ fn fs_hbt(in: HbtOut) -> @location(0) vec4<f32> {
     }
     let tint = 0.85 + 0.3 * in.extra.x;
     let tint3 = vec3<f32>(tint, mix(tint, 1.0, 0.5), 1.0);
-    // Received shadow: the scene's shadow map just outside the tree towards the sun (the tree's
-    // own shadowing is in the BTF).
-    let radius = sp.min.w * in.extra.z;
-    let vis = sun_visibility(in.world + frame.sun_dir.xyz * radius, vec3<f32>(0.0));
+    var vis = 1.0;
+    var sky_vis = 1.0;
+    if (atlas.params.z > 0.5) {
+        // Received shadow from the cascades, just outside the object towards the sun (its own
+        // shadowing is in the BTF).
+        vis = sun_visibility(in.world + frame.sun_dir.xyz * in.extra.w, vec3<f32>(0.0));
+    } else {
+        // MNP01 §4.2: the visibility cube-maps' transmittance, interpolated across the box.
+        let q = clamp((in.model - sp.min.xyz) / max(sp.max.xyz - sp.min.xyz, vec3<f32>(1e-6)),
+            vec3<f32>(0.0), vec3<f32>(1.0));
+        vis = corners8(in.vis.x, in.vis.y, q);
+        sky_vis = corners8(in.vis.z, in.vis.w, q);
+    }
     let sky_color = mix(frame.sky_horizon.rgb, frame.sky_zenith.rgb, 0.5);
     // The sums are premultiplied by `direct.a`; rescale them to the output's opacity.
     let lit = tint3 * (alpha / max(direct.a, 1e-6)) * (frame.sun_color.rgb * vis * direct.rgb
-        + sky_color * sky + frame.sky_ground.rgb * ground);
+        + sky_color * sky * sky_vis + frame.sky_ground.rgb * ground);
     let fogged = apply_fog_premultiplied(lit, alpha, in.world);
     return vec4<f32>(debug_tint(fogged / alpha, in.world, 2) * alpha, alpha);
 }

@@ -63,6 +63,8 @@
 
 pub mod bake;
 mod draw;
+pub mod scene;
+pub mod visibility;
 
 pub use bake::{HbtBaked, reconstruction_weights};
 pub use draw::Hbt;
@@ -98,12 +100,58 @@ impl HbtProjection {
     }
 }
 
+/// Where trees' received sun shadows come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum HbtShadows {
+    /// MNP01 §3.3/§4.2: the hierarchy of visibility cube-maps (other trees and terrain at the
+    /// top level, other branches below), which also scale the sky term.
+    CubeMaps,
+    /// The renderer's cascaded shadow maps, sampled outside the tree towards the sun (the first
+    /// increment's method; no sky occlusion by neighbours).
+    Cascades,
+}
+
+impl HbtShadows {
+    /// The name used in flags.
+    pub fn name(self) -> &'static str {
+        match self {
+            HbtShadows::CubeMaps => "cubemaps",
+            HbtShadows::Cascades => "cascades",
+        }
+    }
+
+    /// Parses `cubemaps` or `cascades`.
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "cubemaps" => Some(HbtShadows::CubeMaps),
+            "cascades" => Some(HbtShadows::Cascades),
+            _ => None,
+        }
+    }
+}
+
 /// Bake and draw parameters of `hbt`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct HbtParams {
-    /// Levels of the hierarchy baked: 1, the tree; 2, also its main branches (baked and stored,
-    /// not drawn yet).
+    /// Levels of the hierarchy: 1, the tree; 2, also the level below (representative main
+    /// branches and the plant's rest), opened when the tree's texels would be magnified.
     pub levels: u32,
+    /// View-direction set of the level below: subdivision level 0..=3.
+    pub branch_view_level: u32,
+    /// Light-direction set of the level below.
+    pub branch_light_level: u32,
+    /// Most distinct main branches baked per plant (the rest are drawn with a scaled
+    /// representative; see [`bake::branch_level`]).
+    pub max_branch_objects: u32,
+    /// Side of each visibility cube-map face (MNP01 uses 32).
+    pub cube_resolution: u32,
+    /// Draw only: a tree opens into its branches when one of its texels would cover more than
+    /// this many pixels (MNP01 §4: when the billboard would be magnified).
+    pub open_texel_pixels: f32,
+    /// Draw only: the cross-fade band around that switch, relative (0 = hard switch).
+    pub band: f32,
+    /// Draw only: received sun shadows from cube-maps or cascades.
+    pub shadows: HbtShadows,
     /// View-direction set: subdivision level 0..=3 (6, 18, 66 or 258 samples).
     pub view_level: u32,
     /// Light-direction set: subdivision level 0..=3.
@@ -127,7 +175,14 @@ pub struct HbtParams {
 impl Default for HbtParams {
     fn default() -> Self {
         Self {
-            levels: 1,
+            levels: 2,
+            branch_view_level: 1,
+            branch_light_level: 1,
+            max_branch_objects: 6,
+            cube_resolution: 8,
+            open_texel_pixels: 1.0,
+            band: 0.3,
+            shadows: HbtShadows::CubeMaps,
             // 66 views: with 18 (45° apart) the blend of 3 differing silhouettes blurs trees
             // and their shadows (FLIP on the default view 0.107 with 18, 0.082 with 66).
             view_level: 2,
@@ -152,7 +207,34 @@ impl HbtParams {
                 self.levels
             ));
         }
-        for (what, level) in [("view", self.view_level), ("light", self.light_level)] {
+        if !(1..=64).contains(&self.max_branch_objects) {
+            return bad(format!(
+                "hbt branch objects {}: must be 1 to 64",
+                self.max_branch_objects
+            ));
+        }
+        if !(2..=bake::MAX_CUBE_RESOLUTION).contains(&self.cube_resolution) {
+            return bad(format!(
+                "hbt cube-map resolution {}: must be 2 to {} (MNP01 uses 32)",
+                self.cube_resolution,
+                bake::MAX_CUBE_RESOLUTION
+            ));
+        }
+        if !(self.open_texel_pixels.is_finite() && (0.1..=16.0).contains(&self.open_texel_pixels)) {
+            return bad(format!(
+                "hbt open texel pixels {}: must be 0.1 to 16",
+                self.open_texel_pixels
+            ));
+        }
+        if !(self.band.is_finite() && (0.0..=0.9).contains(&self.band)) {
+            return bad(format!("hbt band {}: must be 0 to 0.9", self.band));
+        }
+        for (what, level) in [
+            ("view", self.view_level),
+            ("light", self.light_level),
+            ("branch view", self.branch_view_level),
+            ("branch light", self.branch_light_level),
+        ] {
             if level > MAX_LEVEL {
                 return bad(format!(
                     "hbt {what} level {level}: must be 0 to {MAX_LEVEL} (6, 18, 66 or 258 directions)"
