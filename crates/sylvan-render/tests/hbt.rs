@@ -482,3 +482,225 @@ fn species_sharing_a_plant_share_its_images() {
         "one species {a} bytes, two of the same plant {b}"
     );
 }
+
+/// Renders `scene` with `plants` at `size`² (one frame).
+fn render_with(
+    gpu: &sylvan_gpu::Gpu,
+    scene: &sylvan_scene::Scene,
+    plants: &[sylvan_plant::Plant],
+    technique: sylvan_render::TechniqueKind,
+    hbt: &HbtParams,
+    size: u32,
+    spp: u32,
+) -> image::RgbImage {
+    let options = sylvan_render::RenderOptions {
+        width: size,
+        height: size,
+        spp,
+        technique,
+        hbt: hbt.clone(),
+        cache: CachePolicy::Off,
+        ..Default::default()
+    };
+    let mut r = sylvan_render::Renderer::new(gpu, scene, plants, &options).expect("renderer");
+    r.render(gpu, &scene.camera, &scene.sun).expect("frame");
+    image::DynamicImage::ImageRgba8(r.read_image(gpu).unwrap()).into_rgb8()
+}
+
+#[test]
+fn a_tree_in_another_trees_shadow_darkens_as_in_the_reference() {
+    use sylvan_render::TechniqueKind::{Geometry, Hbt};
+    let gpu = gpu();
+    // Sun from the south (−Z), 35° high: shadows fall towards +Z. A (14 m) stands south of
+    // B (10 m), which is in its shadow; C (10 m, same rotation) stands in the open.
+    let tree = |x: f32, z: f32, height: f32| TreeInstance {
+        position: Vec3::new(x, 0.0, z),
+        species: 0,
+        height,
+        rotation: 0.4,
+    };
+    let (b, c) = (Vec3::new(60.0, 0.0, 40.0), Vec3::new(80.0, 0.0, 40.0));
+    let trees = vec![
+        tree(60.0, 32.0, 14.0),
+        tree(b.x, b.z, 10.0),
+        tree(c.x, c.z, 10.0),
+    ];
+    // From the south-west: B and C's sunlit sides, A beside the line of sight to B.
+    let camera = Camera {
+        position: Vec3::new(40.0, 7.0, 15.0),
+        look_at: Vec3::new(70.0, 5.0, 40.0),
+        fov_deg: 40.0,
+    };
+    let sun = common::sun(180.0, 35.0);
+    let scene = common::scene(common::terrain(140.0, 33, |_, _| 0.0), trees, camera, sun);
+    let plants = vec![isotropic_tree()];
+    let size = 160;
+    // The default direction sets (66 views × 18 lights): the crown's density as drawn matters.
+    let p = HbtParams {
+        supersample: 2,
+        ..Default::default()
+    };
+    let reference = render_with(&gpu, &scene, &plants, Geometry, &p, size, 16);
+    let hbt = render_with(&gpu, &scene, &plants, Hbt, &p, size, 1);
+    let cubes = HbtParams {
+        shadows: hbt::HbtShadows::CubeMaps,
+        ..p.clone()
+    };
+    let hbt_cubes = render_with(&gpu, &scene, &plants, Hbt, &cubes, size, 1);
+    let crown = Vec3::new(0.0, 6.0, 0.0);
+    let darkening = |img: &image::RgbImage| {
+        let shadowed = common::luma_at(img, &scene.camera, b + crown, 3);
+        let open = common::luma_at(img, &scene.camera, c + crown, 3);
+        1.0 - shadowed / open
+    };
+    // Above the ground north of the trees, where their shadows fall (no crown in view).
+    let top = common::top_down(70.0, 52.0, 25.0, 40.0);
+    let ground = common::scene(
+        common::terrain(140.0, 33, |_, _| 0.0),
+        scene.trees.clone(),
+        top,
+        sun,
+    );
+    let ground_ref = render_with(&gpu, &ground, &plants, Geometry, &p, 96, 16);
+    let ground_hbt = render_with(&gpu, &ground, &plants, Hbt, &p, 96, 1);
+    // Shadowed ground: darker than 70 % of the lit ground (the 95th percentile).
+    let coverage = |img: &image::RgbImage| {
+        let mut l: Vec<f32> = img
+            .pixels()
+            .map(|p| 0.2126 * p[0] as f32 + 0.7152 * p[1] as f32 + 0.0722 * p[2] as f32)
+            .collect();
+        l.sort_by(f32::total_cmp);
+        let lit = l[l.len() * 95 / 100];
+        l.iter().filter(|&&x| x < 0.7 * lit).count() as f32 / l.len() as f32
+    };
+    if let Ok(dir) = std::env::var("HBT_DUMP") {
+        for (name, img) in [
+            ("shadow-ref", &reference),
+            ("shadow-hbt", &hbt),
+            ("shadow-hbt-cubemaps", &hbt_cubes),
+            ("ground-ref", &ground_ref),
+            ("ground-hbt", &ground_hbt),
+        ] {
+            img.save(format!("{dir}/{name}.png")).unwrap();
+        }
+    }
+    let (d_ref, d_hbt, d_cube) = (
+        darkening(&reference),
+        darkening(&hbt),
+        darkening(&hbt_cubes),
+    );
+    let (c_ref, c_hbt) = (coverage(&ground_ref), coverage(&ground_hbt));
+    eprintln!(
+        "darkening of the shadowed tree: reference {d_ref:.3}, hbt (default: sun from cascades) {d_hbt:.3}, hbt (sun from cube-maps) {d_cube:.3}; ground shadow coverage: reference {c_ref:.3}, hbt {c_hbt:.3}"
+    );
+    // Measured on lavapipe: reference 0.289, cascades 0.261, cube-maps 0.158 (MNP01's 8-corner
+    // interpolation spreads the shadow over the whole crown); ground 0.112 vs hbt 0.071.
+    assert!(
+        d_ref > 0.15,
+        "the set-up must shadow B in the reference ({d_ref})"
+    );
+    assert!(
+        (d_hbt - d_ref).abs() <= 0.2 * d_ref,
+        "hbt darkens the shadowed tree by {d_hbt:.3}, the reference by {d_ref:.3}"
+    );
+    assert!(
+        d_cube > 0.1,
+        "the cube-maps must darken the shadowed tree too ({d_cube:.3})"
+    );
+    assert!(c_ref > 0.1, "the ground view must hold shadow ({c_ref})");
+    // NOT the issue's target (within 10 %): hbt's stochastic casters cover 37 % less ground
+    // than the reference on this grove. This bound only guards against getting worse; the
+    // gap is reported in BENCHMARKS.md and the issue note.
+    assert!(
+        c_hbt >= 0.55 * c_ref,
+        "ground shadow coverage: hbt {c_hbt:.3}, reference {c_ref:.3}"
+    );
+}
+
+#[test]
+fn levels_differ_less_at_the_switch_than_either_differs_from_the_reference() {
+    use sylvan_render::TechniqueKind::{Geometry, Hbt};
+    let gpu = gpu();
+    let plant = sylvan_plant::preset("pine").unwrap();
+    let p = HbtParams {
+        view_level: 1,
+        light_level: 1,
+        supersample: 2,
+        shadow_resolution: 128,
+        band: 0.0,
+        ..Default::default()
+    };
+    // The switching distance: where one tree-level texel covers `open_texel_pixels` pixels.
+    let (size, fov) = (160u32, 40.0f32);
+    let ppm = size as f32 / (2.0 * (fov.to_radians() / 2.0).tan());
+    let height = 16.0;
+    let model = Vec3::from(plant.bbox_max) - Vec3::from(plant.bbox_min);
+    let texel_m = model.max_element() / p.tile as f32 * height / plant.bbox_max[1];
+    let dist = texel_m * ppm / p.open_texel_pixels;
+    let at = Vec3::new(60.0, 0.0, 60.0);
+    let trees = vec![TreeInstance {
+        position: at,
+        species: 0,
+        height,
+        rotation: 0.3,
+    }];
+    let camera = Camera {
+        position: Vec3::new(at.x, height * 0.5, at.z - dist),
+        look_at: Vec3::new(at.x, height * 0.5, at.z),
+        fov_deg: fov,
+    };
+    let scene = common::scene(
+        common::terrain(160.0, 33, |_, _| 0.0),
+        trees,
+        camera,
+        common::sun(150.0, 40.0),
+    );
+    let plants = vec![plant];
+    // Just outside and just inside the switch (band 0: a hard switch).
+    let closed = HbtParams {
+        open_texel_pixels: p.open_texel_pixels * 1.05,
+        ..p.clone()
+    };
+    let opened = HbtParams {
+        open_texel_pixels: p.open_texel_pixels * 0.95,
+        ..p.clone()
+    };
+    let reference = render_with(&gpu, &scene, &plants, Geometry, &p, size, 16);
+    let level1 = render_with(&gpu, &scene, &plants, Hbt, &closed, size, 1);
+    let level2 = render_with(&gpu, &scene, &plants, Hbt, &opened, size, 1);
+    if let Ok(dir) = std::env::var("HBT_DUMP") {
+        for (name, img) in [
+            ("switch-ref", &reference),
+            ("switch-1", &level1),
+            ("switch-2", &level2),
+        ] {
+            img.save(format!("{dir}/{name}.png")).unwrap();
+        }
+    }
+    // Around the tree only (it spans about a third of the image).
+    let crop = |img: &image::RgbImage| {
+        image::imageops::crop_imm(img, size / 4, size / 8, size / 2, size * 3 / 4).to_image()
+    };
+    let flip = |a: &image::RgbImage, b: &image::RgbImage| {
+        sylvan_eval::flip(&crop(a), &crop(b)).unwrap().mean
+    };
+    let (switch, e1, e2) = (
+        flip(&level1, &level2),
+        flip(&reference, &level1),
+        flip(&reference, &level2),
+    );
+    eprintln!(
+        "at the switch ({dist:.1} m, {:.0} px tall): FLIP level 1 vs level 2 {switch:.4}; vs reference: level 1 {e1:.4}, level 2 {e2:.4}",
+        height * ppm / dist
+    );
+    // The bound: switching levels changes the picture less than either level already differs
+    // from the reference, so the switch adds no error of its own beyond what each level has.
+    assert!(
+        level1 != level2,
+        "the two renders must use different levels"
+    );
+    assert!(
+        switch < e1.max(e2),
+        "the switch changes the tree by {switch:.4}, more than the levels' own errors {e1:.4} / {e2:.4}"
+    );
+}

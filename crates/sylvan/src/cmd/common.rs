@@ -101,8 +101,8 @@ pub struct BakeArgs {
     /// hbt: a tree opens into its branches when one of its texels would cover more than this many pixels.
     #[arg(long, default_value_t = HbtParams::default().open_texel_pixels)]
     pub hbt_open_pixels: f32,
-    /// hbt: received sun shadows from `cubemaps` (MNP01 §3.3) or `cascades`.
-    #[arg(long, default_value = "cubemaps")]
+    /// hbt: received sun shadows from `cascades` (measured closer to the reference) or `cubemaps` (MNP01 §3.3's 8-corner interpolation); the sky term always comes from the cube-maps.
+    #[arg(long, default_value = "cascades")]
     pub hbt_shadows: String,
     /// hbt: projection of the blended images, `facing` or `cross` (MNP01 fig. 3.2).
     #[arg(long, default_value = "facing")]

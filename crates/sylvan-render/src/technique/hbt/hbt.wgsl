@@ -267,18 +267,16 @@ fn fs_hbt(in: HbtOut) -> @location(0) vec4<f32> {
     }
     let tint = 0.85 + 0.3 * in.extra.x;
     let tint3 = vec3<f32>(tint, mix(tint, 1.0, 0.5), 1.0);
-    var vis = 1.0;
-    var sky_vis = 1.0;
+    // MNP01 §4.2: the visibility cube-maps' transmittance, interpolated across the box: the
+    // sky term always, the sun unless it comes from the cascades.
+    let q = clamp((in.model - sp.min.xyz) / max(sp.max.xyz - sp.min.xyz, vec3<f32>(1e-6)),
+        vec3<f32>(0.0), vec3<f32>(1.0));
+    let sky_vis = corners8(in.vis.z, in.vis.w, q);
+    var vis = corners8(in.vis.x, in.vis.y, q);
     if (atlas.params.z > 0.5) {
         // Received shadow from the cascades, just outside the object towards the sun (its own
         // shadowing is in the BTF).
         vis = sun_visibility(in.world + frame.sun_dir.xyz * in.extra.w, vec3<f32>(0.0));
-    } else {
-        // MNP01 §4.2: the visibility cube-maps' transmittance, interpolated across the box.
-        let q = clamp((in.model - sp.min.xyz) / max(sp.max.xyz - sp.min.xyz, vec3<f32>(1e-6)),
-            vec3<f32>(0.0), vec3<f32>(1.0));
-        vis = corners8(in.vis.x, in.vis.y, q);
-        sky_vis = corners8(in.vis.z, in.vis.w, q);
     }
     let sky_color = mix(frame.sky_horizon.rgb, frame.sky_zenith.rgb, 0.5);
     // The sums are premultiplied by `direct.a`; rescale them to the output's opacity.
