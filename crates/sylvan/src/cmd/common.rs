@@ -104,6 +104,9 @@ pub struct BakeArgs {
     /// hbt: received sun shadows from `cascades` (measured closer to the reference) or `cubemaps` (MNP01 §3.3's 8-corner interpolation); the sky term always comes from the cube-maps.
     #[arg(long, default_value = "cascades")]
     pub hbt_shadows: String,
+    /// hbt baseline: reconstruct every tree under this fixed light direction X,Y,Z (towards the light) whatever the sun — a view-only impostor baked under one light.
+    #[arg(long)]
+    pub hbt_fixed_light: Option<String>,
     /// hbt: projection of the blended images, `facing` or `cross` (MNP01 fig. 3.2).
     #[arg(long, default_value = "facing")]
     pub hbt_projection: String,
@@ -156,7 +159,24 @@ impl BakeArgs {
                 self.hbt_shadows
             )
         })?;
+        let fixed_light = match &self.hbt_fixed_light {
+            None => None,
+            Some(v) => {
+                let parts: Vec<f32> = v
+                    .split(',')
+                    .map(|x| x.trim().parse::<f32>())
+                    .collect::<Result<_, _>>()
+                    .map_err(|_| {
+                        anyhow::anyhow!("--hbt-fixed-light {v}: expected X,Y,Z numbers")
+                    })?;
+                let [x, y, z] = parts[..] else {
+                    anyhow::bail!("--hbt-fixed-light {v}: expected three numbers X,Y,Z");
+                };
+                Some([x, y, z])
+            }
+        };
         let p = HbtParams {
+            fixed_light,
             levels: self.hbt_levels,
             view_level: level("hbt-views", self.hbt_views)?,
             light_level: level("hbt-lights", self.hbt_lights)?,

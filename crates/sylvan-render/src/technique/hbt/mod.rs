@@ -1,65 +1,84 @@
 //! Technique `hbt`: MNP01 — Meyer, Neyret, Poulin, *Interactive Rendering of Trees with
-//! Shading and Shadows*, EGWR 2001. A first increment: the top level of the hierarchy is
-//! baked and drawn; the level below (main branches) can be baked, not yet drawn.
+//! Shading and Shadows*, EGWR 2001. Two levels of the hierarchy: the tree, and below it its
+//! main branches and the rest of the plant.
 //!
 //! Implements:
-//! - §3.1 the **bidirectional texture function** of the whole tree (one base object): one
-//!   billboard per (view sample, light sample) pair of the shared direction sets
-//!   ([`crate::directions`], 6/18/66/258 samples), holding the tree's colour lit by that light
-//!   with **self-shadowing** inside the tree, plus the **ambient BTF** per view sample (sky light
-//!   with a sky-occlusion estimate), sun and sky kept apart as §3.1 asks ([`bake`]);
+//! - §3.1 the **bidirectional texture function** of a base object: one billboard per (view
+//!   sample, light sample) pair of the shared direction sets ([`crate::directions`], 6/18/66/258
+//!   samples), holding the object's colour lit by that light with **self-shadowing** inside it,
+//!   plus the **ambient BTF** per view sample, sun and sky kept apart as §3.1 asks ([`bake`]);
 //! - §6.1 building it: each view is rasterised once by the shared baker ([`crate::bake`]) into a
 //!   supersampled albedo/normal/depth G-buffer; each light sample gets an orthographic depth map
-//!   of the tree (alpha-tested leaves, so alpha-aware); every covered G-buffer sample is lit
+//!   of the object (alpha-tested leaves, so alpha-aware); every covered G-buffer sample is lit
 //!   with the reference's model (Lambert + leaf transmission) times its visibility from that
 //!   light (5×5 PCF in the light's depth map: soft self-shadows), then box-filtered down to the
 //!   tile and mip-mapped;
-//! - §3.2/§7 the **level below**: with [`HbtParams::levels`] = 2, the same BTF for each distinct
-//!   base object the plant's root places (`plant.instancing`: the main branches,
-//!   [`bake::main_branches`]), each expanded from its instances and baked in its own frame
-//!   ([`bake::ObjectBtf`]);
-//! - §4.1 and the appendix, **reconstruction**: per tree and frame, the 3 view samples and
-//!   3 light samples enclosing the (model-space) eye and sun directions with their barycentric
+//! - §3.2/§7 the **level below** ([`HbtParams::levels`] = 2, the default): representative main
+//!   branches and the plant's rest, each with its BTF, and their placements
+//!   ([`bake::branch_level`]);
+//! - §3.3/§6.2 the **hierarchy of visibility cube-maps** ([`visibility`]): for each branch
+//!   placement (baked) and each placed tree (built when the scene is placed, [`scene`]), a
+//!   cube-map at each of the 8 corners of its box holding the opacity of the rest of its level —
+//!   the other branches of the tree, or the other trees and the terrain — from the occluders'
+//!   own baked coverage;
+//! - §4 **LOD by projected size**: a tree opens into the level below when one of its texels
+//!   would cover more than [`HbtParams::open_texel_pixels`] pixels, cross-faded over
+//!   [`HbtParams::band`]; §5 every billboard (trees and opened trees' objects) drawn back to
+//!   front in one instanced draw;
+//! - §4.1 and the appendix, **reconstruction**: per billboard and frame, the 3 view samples and
+//!   3 light samples enclosing the (object-space) eye and sun directions with their barycentric
 //!   weights (MNP01's precomputed table, [`crate::directions::DirectionLut::lookup`], on the
-//!   CPU per instance: ~3× faster than descending the subdivision, same result); the 9
-//!   products, those below [`HbtParams::min_weight`] dropped and the rest renormalised
-//!   ([`reconstruction_weights`]); 9 weighted fetches summed in one fragment (the
+//!   CPU); the 9 products, those below [`HbtParams::min_weight`] dropped and the rest
+//!   renormalised ([`reconstruction_weights`]); 9 weighted fetches summed in one fragment (the
 //!   order-independent weighted sum the appendix builds with "darken then add", done in one
-//!   pass) and composited premultiplied over the background. Colour = sun colour × direct BTF
-//!   × received shadow + sky colour × ambient BTF (§4.2). Facing (billboard) or cross
-//!   projection (§4.1, fig. 3.2), selectable ([`HbtProjection`]).
+//!   pass) and composited premultiplied over the background. Facing (billboard) or cross
+//!   projection (§4.1, fig. 3.2), selectable ([`HbtProjection`]);
+//! - §4.2 **lighting**: sun colour × direct BTF × sun transmittance + sky colour × ambient BTF
+//!   × sky transmittance (+ ground colour × the ground-facing ambient image); the levels'
+//!   cube-maps combined as `1 − Π(1 − opacity)` at the object's corners and interpolated
+//!   trilinearly across the billboard; the sky transmittance is each cube-map's
+//!   cosine-weighted upper-hemisphere mean. Moving the sun re-lights everything: only the sun's
+//!   look-up in the cube-maps (when it moves) and the shadow maps change.
 //!
 //! Deviations, plainly:
-//! - **Only the top level is drawn.** Main-branch BTFs are baked (opt-in) but not used yet;
-//!   the small-branch level, LOD by projected size (opening a tree into its branches, §4, §5),
-//!   back-to-front drawing of opened objects, and baking higher levels by rendering the lower
-//!   levels' BTFs (§6.1, for consistency between levels) are not implemented. Each level is
-//!   baked from geometry instead. A branch's sky occlusion is estimated inside the branch only
-//!   (its placement in the tree varies per instance).
-//! - **No visibility cube-maps (§3.3, §4.2, §6.2).** Shadows received from the rest of the scene
-//!   come from the renderer's cascaded shadow maps, sampled once per fragment at the billboard
-//!   point moved towards the sun by the tree's bounding radius (so the tree does not shadow
-//!   itself a second time: its self-shadowing is in the BTF). Trees cast into those maps with
-//!   stochastic (screen-door) alpha. Ambient occlusion by other trees is not modelled.
+//! - **Representative branches.** An L-system tree has as many distinct main branches as its
+//!   parameters vary (26 on the pine, 223 on the prunus); MNP01's pine was built from a few
+//!   instanced ones. At most [`HbtParams::max_branch_objects`] are baked, and the others are
+//!   drawn with the representative of their size group, scaled. Only two levels (MNP01 §7 has
+//!   three plus needles); nearer than the branches' own magnification the `auto` chain's
+//!   geometry band takes over.
+//! - **Each level is baked from geometry**, not by rendering the lower level's BTFs with the
+//!   runtime algorithm (§6.1); consistency between levels is measured instead (a test bounds
+//!   the ꟻLIP between the two levels at the switching distance by each level's own error).
+//! - **Received sun shadows come from the cascaded shadow maps by default**
+//!   ([`HbtShadows::Cascades`]), sampled once per fragment at the billboard point moved towards
+//!   the sun by the object's bounding radius (its own shadowing is in the BTF); the sky term
+//!   still comes from the cube-maps. MNP01's sun-from-cube-maps is [`HbtShadows::CubeMaps`]:
+//!   measured, its 8-corner interpolation spreads a neighbour's shadow over the whole crown and
+//!   under-darkens a tree in another's shadow (0.158 vs the reference's 0.289; cascades 0.261).
+//! - **Cube-maps are evaluated on the CPU** per texel from the occluders' baked coverage rather
+//!   than rendered (§6.2); 8² per face by default (MNP01: 32², same ꟻLIP here at a quarter of
+//!   the memory and build time). Occluders: at most 48 nearest within 5 bounding radii.
+//! - **Shadow casting** (the ground's alpha shadow map, §5): trees cast into the cascades with
+//!   stochastic (screen-door) alpha from the tree-level coverage of the view sample nearest the
+//!   sun; opened trees cast at the tree level.
 //! - **Self-shadowing** uses depth maps with PCF rather than MNP01's ray tracer (§6.1).
-//! - **Sky occlusion** is the reference's crown-position estimate (`crown_occlusion` in
-//!   `frame.wgsl`) evaluated at each baked sample, so `hbt` and `geometry` agree, not the mean
-//!   of a visibility cube-map. The ambient BTF is two images per view sample — sky-facing and
-//!   ground-facing parts of the reference's hemispherical sky term — so sky and ground colours
-//!   stay run-time parameters.
+//! - **Ambient occlusion inside an object** is the reference's crown-position estimate
+//!   (`crown_occlusion` in `frame.wgsl`) evaluated at each baked sample (in the object's own
+//!   box for the level below), so `hbt` and `geometry` agree; between objects and trees it is
+//!   the cube-maps' sky term.
 //! - **Cross projection** composites its 3 planes with premultiplied "over", each plane's
 //!   opacity its share of the optical depth (as `boxtree`), not the appendix's exact weighted
 //!   sum (which facing projection gets exactly).
 //! - Leaf transmission is applied to wood too (the baker does not tell them apart), as in
 //!   `boxtree`.
 //!
-//! Cost: bake = V + L rasterisations plus a CPU lighting pass of V·L·(tile·ss)² samples; per
-//! frame, 2 direction look-ups per tree in view and 1 per tree per cascade (CPU, ~83 ns each
-//! in release on this project's test machine: ~2 ms for the default view), one instanced
-//! draw per pass, up to 9 + 6 texture fetches per fragment. Memory: (V·L + 2V) tiles of
-//! `tile²` RGBA8 with mips, per plant (species sharing a plant share it), in one atlas (66 × 18 at 32 px, the
-//! default: 7.2 MB per plant; 18 × 18: 1.97 MB; main branches add that per distinct branch
-//! object).
+//! Cost: bake = V + L rasterisations plus a CPU lighting pass of V·L·(tile·ss)² samples per
+//! object, plus the branch cube-maps; per frame, 2 direction look-ups per billboard (CPU) and
+//! 8 cube-map look-ups per opened branch, one instanced draw per pass, up to 9 + 3 texture
+//! fetches per fragment. Memory (default, per plant): tree BTF 66 × 18 at 32 px = 7.2 MB;
+//! 7 objects × 18 × 18 = 13.8 MB; branch cube-maps 6·8² bytes × 8 corners per placement; the
+//! scene's cube-maps 3 KB per tree (CPU). Figures in BENCHMARKS.md.
 
 pub mod bake;
 mod draw;
