@@ -47,7 +47,7 @@ for sun in 200,40 20,40 110,30 290,30 200,8 20,8 110,70 0,88; do
     $S render $SCENE "${common[@]}" --spp 16 --out "$OUT/relight-$tag-ref.png" 2>>"$OUT/log.txt"
     $S render $SCENE "${common[@]}" --out "$OUT/relight-$tag-geometry.png" 2>>"$OUT/log.txt"
     $S render $SCENE "${common[@]}" --technique hbt --out "$OUT/relight-$tag-hbt.png" 2>>"$OUT/log.txt"
-    $S render $SCENE "${common[@]}" --technique hbt --hbt-fixed-light "$fixed" --out "$OUT/relight-$tag-fixed.png" 2>>"$OUT/log.txt"
+    $S render $SCENE "${common[@]}" --technique hbt --hbt-fixed-light="$fixed" --out "$OUT/relight-$tag-fixed.png" 2>>"$OUT/log.txt"
     $S render $SCENE "${common[@]}" --technique boxtree --out "$OUT/relight-$tag-boxtree.png" 2>>"$OUT/log.txt"
     crop=(--crop "$(python3 -c "h=$h; s=int(1.3*h); print(f'{max(320-s//2,0)},{max(240-s//2,0)},{s},{s}')")")
     r="$OUT/relight-$tag-ref.png"
