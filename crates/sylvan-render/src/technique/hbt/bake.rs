@@ -126,9 +126,7 @@ impl HbtBaked {
 
     /// The cube-map of `placement` at bounding-box corner `corner`.
     pub fn cube(&self, placement: usize, corner: usize) -> &[u8] {
-        let n = self.cube_bytes();
-        let at = (placement * visibility::CORNERS + corner) * n;
-        &self.cubes[at..at + n]
+        cube_of(&self.cubes, self.cube_resolution, placement, corner)
     }
 
     /// Bytes of image data (all mips), tree level then the level below.
@@ -289,6 +287,14 @@ impl HbtBaked {
             cubes,
         })
     }
+}
+
+/// The cube-map of `placement` at `corner` in a placement-major run of cube-maps of side `res`
+/// ([`HbtBaked::cubes`]).
+pub fn cube_of(cubes: &[u8], res: u32, placement: usize, corner: usize) -> &[u8] {
+    let n = visibility::FACES * (res * res) as usize;
+    let at = (placement * visibility::CORNERS + corner) * n;
+    &cubes[at..at + n]
 }
 
 /// Writes one object's direct and ambient image sets.

@@ -106,8 +106,13 @@ struct PlantDraw {
     /// Tree-level texel size per unit scale (model metres).
     texel: f32,
     placements: Vec<PlacementDraw>,
-    /// Its bake (for the branch-level cube-maps), shared with species using the same plant.
-    baked: HbtBaked,
+    /// Index of its bake in `prepare`'s list (species with equal bakes share one entry).
+    source: usize,
+    /// The tree level's ambient images (their alpha is the coverage the scene's cube-maps need).
+    ambient: Vec<hb::Mips>,
+    /// The branch placements' cube-maps ([`HbtBaked::cubes`]) and their side.
+    cubes: Vec<u8>,
+    cube_resolution: u32,
 }
 
 /// The prepared MNP01 technique.
@@ -154,7 +159,7 @@ impl Hbt {
             + self
                 .plants
                 .iter()
-                .map(|p| p.baked.cubes.len() as u64)
+                .map(|p| p.cubes.len() as u64)
                 .sum::<u64>()
     }
 
@@ -175,14 +180,8 @@ impl Hbt {
             .species_plant
             .iter()
             .map(|&p| {
-                let b = &self.plants[p].baked;
-                hb::coverage(
-                    &self.views,
-                    &b.ambient,
-                    Vec3::from(b.bbox_min),
-                    Vec3::from(b.bbox_max),
-                    b.tile,
-                )
+                let b = &self.plants[p];
+                hb::coverage(&self.views, &b.ambient, b.min, b.max, self.params.tile)
             })
             .collect();
         self.scene = Some(SceneVisibility::build(
@@ -240,11 +239,6 @@ impl<'a> SetSink<'_, 'a> {
 /// World direction → model space of a tree rotated by (cos, sin) about Y.
 fn to_model_dir(d: Vec3, c: f32, s: f32) -> Vec3 {
     Vec3::new(c * d.x - s * d.z, d.y, s * d.x + c * d.z)
-}
-
-/// Whether the sun's visibility comes from the cube-maps (not the cascades).
-fn p_shadows_cube(p: &HbtParams) -> bool {
-    p.shadows == HbtShadows::CubeMaps
 }
 
 fn pack_unorm(v: [f32; 4]) -> u32 {
@@ -383,7 +377,8 @@ impl Representation for Hbt {
                 )));
             }
             // Species sharing a plant share its images (the bake gives them equal assets).
-            if let Some(same) = plant_draws.iter().position(|p| &p.baked == b) {
+            let index = species_plant.len();
+            if let Some(same) = plant_draws.iter().position(|p| &baked[p.source] == b) {
                 species_plant.push(same);
                 continue;
             }
@@ -439,7 +434,10 @@ impl Representation for Hbt {
                 radius: (max - min).length() * 0.5,
                 texel: 2.0 * (max - min).max_element() * 0.5 / tile as f32,
                 placements,
-                baked: b.clone(),
+                source: index,
+                ambient: b.ambient.clone(),
+                cubes: b.cubes.clone(),
+                cube_resolution: b.cube_resolution,
             });
         }
         let device = &gpu.device;
@@ -617,7 +615,8 @@ impl Representation for Hbt {
             .params
             .fixed_light
             .map_or(sun, |l| Vec3::from(l).normalize());
-        let cube_sun = p_shadows_cube(&self.params);
+        // Whether the sun's visibility comes from the cube-maps (not the cascades).
+        let cube_sun = self.params.shadows == HbtShadows::CubeMaps;
         if let Some(scene) = &mut self.scene
             && cube_sun
         {
@@ -702,7 +701,7 @@ impl Representation for Hbt {
                     }
                     self.opened += 1;
                     let sun_model = to_model_dir(sun, c, sn);
-                    let res = plant.baked.cube_resolution as usize;
+                    let res = plant.cube_resolution as usize;
                     for pl in &plant.placements {
                         let to_world = tree.to_world * pl.to_plant;
                         let centre = to_world.transform_point3(pl.centre);
@@ -714,7 +713,7 @@ impl Representation for Hbt {
                             let q = pl.corners_in_tree[k];
                             let branch = if cube_sun {
                                 1.0 - visibility::lookup(
-                                    plant.baked.cube(pl.index, k),
+                                    hb::cube_of(&plant.cubes, plant.cube_resolution, pl.index, k),
                                     res,
                                     sun_model,
                                 )
