@@ -42,9 +42,11 @@ fn isotropic_tree() -> sylvan_plant::Plant {
     plant
 }
 
-/// Small but faithful bake parameters for tests (18 × 18 directions, 32 px).
+/// Small but faithful bake parameters for tests (18 × 18 directions, 32 px), the BTF levels
+/// only (level 3 would draw near trees as their meshes, which is `geometry`).
 fn params() -> HbtParams {
     HbtParams {
+        levels: 2,
         view_level: 1,
         light_level: 1,
         tile: 32,
@@ -536,8 +538,10 @@ fn a_tree_in_another_trees_shadow_darkens_as_in_the_reference() {
     let plants = vec![isotropic_tree()];
     let size = 160;
     // The default direction sets (66 views × 18 lights): the crown's density as drawn matters.
+    // The BTF levels only: by default (level 3) these near trees are drawn as their meshes.
     let p = HbtParams {
         supersample: 2,
+        levels: 2,
         ..Default::default()
     };
     let reference = render_with(&gpu, &scene, &plants, Geometry, &p, size, 16);
@@ -563,6 +567,11 @@ fn a_tree_in_another_trees_shadow_darkens_as_in_the_reference() {
     );
     let ground_ref = render_with(&gpu, &ground, &plants, Geometry, &p, 96, 16);
     let ground_hbt = render_with(&gpu, &ground, &plants, Hbt, &p, 96, 1);
+    let default = HbtParams {
+        supersample: 2,
+        ..Default::default()
+    };
+    let ground_default = render_with(&gpu, &ground, &plants, Hbt, &default, 96, 1);
     // Shadowed ground: darker than 70 % of the lit ground (the 95th percentile).
     let coverage = |img: &image::RgbImage| {
         let mut l: Vec<f32> = img
@@ -580,6 +589,7 @@ fn a_tree_in_another_trees_shadow_darkens_as_in_the_reference() {
             ("shadow-hbt-cubemaps", &hbt_cubes),
             ("ground-ref", &ground_ref),
             ("ground-hbt", &ground_hbt),
+            ("ground-hbt-default", &ground_default),
         ] {
             img.save(format!("{dir}/{name}.png")).unwrap();
         }
@@ -589,9 +599,13 @@ fn a_tree_in_another_trees_shadow_darkens_as_in_the_reference() {
         darkening(&hbt),
         darkening(&hbt_cubes),
     );
-    let (c_ref, c_hbt) = (coverage(&ground_ref), coverage(&ground_hbt));
+    let (c_ref, c_hbt, c_default) = (
+        coverage(&ground_ref),
+        coverage(&ground_hbt),
+        coverage(&ground_default),
+    );
     eprintln!(
-        "darkening of the shadowed tree: reference {d_ref:.3}, hbt (default: sun from cascades) {d_hbt:.3}, hbt (sun from cube-maps) {d_cube:.3}; ground shadow coverage: reference {c_ref:.3}, hbt {c_hbt:.3}"
+        "darkening of the shadowed tree: reference {d_ref:.3}, hbt (BTFs, sun from cascades) {d_hbt:.3}, hbt (BTFs, sun from cube-maps) {d_cube:.3}; ground shadow coverage: reference {c_ref:.3}, hbt BTF casters {c_hbt:.3}, hbt default (these trees cast as meshes) {c_default:.3}"
     );
     // Measured on lavapipe: reference 0.289, cascades 0.261, cube-maps 0.158 (MNP01's 8-corner
     // interpolation spreads the shadow over the whole crown); ground 0.112 vs hbt 0.071.
@@ -608,35 +622,39 @@ fn a_tree_in_another_trees_shadow_darkens_as_in_the_reference() {
         "the cube-maps must darken the shadowed tree too ({d_cube:.3})"
     );
     assert!(c_ref > 0.1, "the ground view must hold shadow ({c_ref})");
-    // NOT the issue's target (within 10 %): hbt's stochastic casters cover 37 % less ground
-    // than the reference on this grove. This bound only guards against getting worse; the
-    // gap is reported in BENCHMARKS.md and the issue note.
+    // The issue's target (within 10 %) holds by default, where trees this near cast as their
+    // meshes (level 3).
+    assert!(
+        (c_default - c_ref).abs() <= 0.1 * c_ref,
+        "ground shadow coverage: hbt default {c_default:.3}, reference {c_ref:.3}"
+    );
+    // NOT the target for trees cast from their BTFs: the stochastic casters cover 37 % less
+    // ground than the reference on this grove. This bound only guards against getting worse;
+    // the gap is reported in BENCHMARKS.md and the issue note.
     assert!(
         c_hbt >= 0.55 * c_ref,
-        "ground shadow coverage: hbt {c_hbt:.3}, reference {c_ref:.3}"
+        "ground shadow coverage: hbt BTF casters {c_hbt:.3}, reference {c_ref:.3}"
     );
 }
 
-#[test]
-fn levels_differ_less_at_the_switch_than_either_differs_from_the_reference() {
+/// Renders one pine at the distance where `texel` (plant units) covers `pixels` pixels, just
+/// outside the switch (`closed`, `pixels` × 1.05) and just inside it (`opened`, × 0.95), and
+/// returns ꟻLIP (closed vs opened, reference vs closed, reference vs opened) around the tree.
+fn at_the_switch(
+    gpu: &sylvan_gpu::Gpu,
+    what: &str,
+    texel: f32,
+    pixels: f32,
+    set: impl Fn(&HbtParams, f32) -> HbtParams,
+    p: &HbtParams,
+) -> (f32, f32, f32) {
     use sylvan_render::TechniqueKind::{Geometry, Hbt};
-    let gpu = gpu();
     let plant = sylvan_plant::preset("pine").unwrap();
-    let p = HbtParams {
-        view_level: 1,
-        light_level: 1,
-        supersample: 2,
-        shadow_resolution: 128,
-        band: 0.0,
-        ..Default::default()
-    };
-    // The switching distance: where one tree-level texel covers `open_texel_pixels` pixels.
     let (size, fov) = (160u32, 40.0f32);
     let ppm = size as f32 / (2.0 * (fov.to_radians() / 2.0).tan());
     let height = 16.0;
-    let model = Vec3::from(plant.bbox_max) - Vec3::from(plant.bbox_min);
-    let texel_m = model.max_element() / p.tile as f32 * height / plant.bbox_max[1];
-    let dist = texel_m * ppm / p.open_texel_pixels;
+    let texel_m = texel * height / plant.bbox_max[1];
+    let dist = texel_m * ppm / pixels;
     let at = Vec3::new(60.0, 0.0, 60.0);
     let trees = vec![TreeInstance {
         position: at,
@@ -644,6 +662,7 @@ fn levels_differ_less_at_the_switch_than_either_differs_from_the_reference() {
         height,
         rotation: 0.3,
     }];
+    // Far enough to see the whole tree: the near switch crops it from the top.
     let camera = Camera {
         position: Vec3::new(at.x, height * 0.5, at.z - dist),
         look_at: Vec3::new(at.x, height * 0.5, at.z),
@@ -656,51 +675,111 @@ fn levels_differ_less_at_the_switch_than_either_differs_from_the_reference() {
         common::sun(150.0, 40.0),
     );
     let plants = vec![plant];
-    // Just outside and just inside the switch (band 0: a hard switch).
-    let closed = HbtParams {
-        open_texel_pixels: p.open_texel_pixels * 1.05,
-        ..p.clone()
+    // One bake for the three renders.
+    let dir = std::env::temp_dir().join(format!("sylvan-hbt-switch-{what}-{}", std::process::id()));
+    let render = |kind, q: &HbtParams, spp| {
+        let options = sylvan_render::RenderOptions {
+            width: size,
+            height: size,
+            spp,
+            technique: kind,
+            hbt: q.clone(),
+            cache: CachePolicy::Dir(dir.clone()),
+            ..Default::default()
+        };
+        let mut r = sylvan_render::Renderer::new(gpu, &scene, &plants, &options).expect("renderer");
+        r.render(gpu, &scene.camera, &scene.sun).expect("frame");
+        image::DynamicImage::ImageRgba8(r.read_image(gpu).unwrap()).into_rgb8()
     };
-    let opened = HbtParams {
-        open_texel_pixels: p.open_texel_pixels * 0.95,
-        ..p.clone()
-    };
-    let reference = render_with(&gpu, &scene, &plants, Geometry, &p, size, 16);
-    let level1 = render_with(&gpu, &scene, &plants, Hbt, &closed, size, 1);
-    let level2 = render_with(&gpu, &scene, &plants, Hbt, &opened, size, 1);
+    let reference = render(Geometry, p, 16);
+    let closed = render(Hbt, &set(p, pixels * 1.05), 1);
+    let opened = render(Hbt, &set(p, pixels * 0.95), 1);
+    std::fs::remove_dir_all(&dir).ok();
     if let Ok(dir) = std::env::var("HBT_DUMP") {
         for (name, img) in [
-            ("switch-ref", &reference),
-            ("switch-1", &level1),
-            ("switch-2", &level2),
+            ("ref", &reference),
+            ("closed", &closed),
+            ("opened", &opened),
         ] {
-            img.save(format!("{dir}/{name}.png")).unwrap();
+            img.save(format!("{dir}/switch-{what}-{name}.png")).unwrap();
         }
     }
-    // Around the tree only (it spans about a third of the image).
+    assert!(
+        closed != opened,
+        "{what}: the two renders must use different levels"
+    );
+    // Around the tree only.
+    let tall = (height * ppm / dist) as u32;
+    let (w, h) = ((tall / 2).clamp(16, size), (tall + 8).clamp(16, size));
     let crop = |img: &image::RgbImage| {
-        image::imageops::crop_imm(img, size / 4, size / 8, size / 2, size * 3 / 4).to_image()
+        image::imageops::crop_imm(img, (size - w) / 2, (size - h) / 2, w, h).to_image()
     };
     let flip = |a: &image::RgbImage, b: &image::RgbImage| {
         sylvan_eval::flip(&crop(a), &crop(b)).unwrap().mean
     };
-    let (switch, e1, e2) = (
-        flip(&level1, &level2),
-        flip(&reference, &level1),
-        flip(&reference, &level2),
+    let r = (
+        flip(&closed, &opened),
+        flip(&reference, &closed),
+        flip(&reference, &opened),
     );
     eprintln!(
-        "at the switch ({dist:.1} m, {:.0} px tall): FLIP level 1 vs level 2 {switch:.4}; vs reference: level 1 {e1:.4}, level 2 {e2:.4}",
-        height * ppm / dist
+        "{what}: at the switch ({dist:.1} m, {tall} px tall): FLIP closed vs opened {:.4}; vs reference: closed {:.4}, opened {:.4}",
+        r.0, r.1, r.2
     );
+    r
+}
+
+#[test]
+fn levels_differ_less_at_the_switch_than_either_differs_from_the_reference() {
+    let gpu = gpu();
+    let plant = sylvan_plant::preset("pine").unwrap();
+    let p = HbtParams {
+        levels: 3,
+        view_level: 1,
+        light_level: 1,
+        supersample: 2,
+        shadow_resolution: 128,
+        band: 0.0,
+        ..Default::default()
+    };
+    let baked = hbt::bake::bake(&gpu, &plant, &p, |_, _| {}).expect("bake");
     // The bound: switching levels changes the picture less than either level already differs
     // from the reference, so the switch adds no error of its own beyond what each level has.
-    assert!(
-        level1 != level2,
-        "the two renders must use different levels"
+    // Tree → main branches (meshes kept out: levels 2).
+    let (switch, e1, e2) = at_the_switch(
+        &gpu,
+        "tree-branches",
+        baked.tree_texel(),
+        p.open_texel_pixels,
+        |p, px| HbtParams {
+            levels: 2,
+            open_texel_pixels: px,
+            ..p.clone()
+        },
+        &p,
     );
     assert!(
         switch < e1.max(e2),
-        "the switch changes the tree by {switch:.4}, more than the levels' own errors {e1:.4} / {e2:.4}"
+        "tree → branches changes the tree by {switch:.4}, more than the levels' own errors {e1:.4} / {e2:.4}"
+    );
+    // Main branches → the plant's meshes.
+    let (switch, e2, e3) = at_the_switch(
+        &gpu,
+        "branches-meshes",
+        baked.mesh_texel(),
+        p.mesh_texel_pixels,
+        |p, px| HbtParams {
+            mesh_texel_pixels: px,
+            ..p.clone()
+        },
+        &p,
+    );
+    // A weaker bound here: the meshes at 1 spp are aliased where the BTFs are prefiltered, so
+    // the two err on opposite sides of the reference and differ from each other by more than
+    // either does from it (measured: 0.175 vs 0.139 / 0.114). The switch must still add no
+    // difference beyond the two errors together (what a metric's triangle inequality allows).
+    assert!(
+        switch < e2 + e3,
+        "branches → meshes changes the tree by {switch:.4}, more than the levels' errors {e2:.4} + {e3:.4}"
     );
 }

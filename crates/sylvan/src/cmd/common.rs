@@ -83,7 +83,7 @@ pub struct BakeArgs {
     /// hbt: billboard size in texels (MNP01 uses 32 or 64).
     #[arg(long, default_value_t = HbtParams::default().tile)]
     pub hbt_tile: u32,
-    /// hbt: hierarchy levels, 1 (the tree) or 2 (also main branches, drawn when the tree's texels would be magnified).
+    /// hbt: hierarchy levels, 1 (the tree), 2 (also main branches, drawn when the tree's texels would be magnified) or 3 (also the plant's meshes, drawn when the branches' would be).
     #[arg(long, default_value_t = HbtParams::default().levels)]
     pub hbt_levels: u32,
     /// hbt: view directions of the branch level's BTFs: 6, 18, 66 or 258.
@@ -101,6 +101,9 @@ pub struct BakeArgs {
     /// hbt: a tree opens into its branches when one of its texels would cover more than this many pixels.
     #[arg(long, default_value_t = HbtParams::default().open_texel_pixels)]
     pub hbt_open_pixels: f32,
+    /// hbt (levels 3): a tree is drawn as its meshes when one texel of its largest main branch would cover more than this many pixels.
+    #[arg(long, default_value_t = HbtParams::default().mesh_texel_pixels)]
+    pub hbt_mesh_pixels: f32,
     /// hbt: received sun shadows from `cascades` (measured closer to the reference) or `cubemaps` (MNP01 §3.3's 8-corner interpolation); the sky term always comes from the cube-maps.
     #[arg(long, default_value = "cascades")]
     pub hbt_shadows: String,
@@ -185,6 +188,7 @@ impl BakeArgs {
             max_branch_objects: self.hbt_branch_objects,
             cube_resolution: self.hbt_cube,
             open_texel_pixels: self.hbt_open_pixels,
+            mesh_texel_pixels: self.hbt_mesh_pixels,
             shadows,
             tile: self.hbt_tile,
             projection,

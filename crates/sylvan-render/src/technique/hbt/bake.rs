@@ -129,6 +129,31 @@ impl HbtBaked {
         cube_of(&self.cubes, self.cube_resolution, placement, corner)
     }
 
+    /// Side of one tree-level texel, in plant units (the image frames the box's largest side).
+    pub fn tree_texel(&self) -> f32 {
+        (Vec3::from(self.bbox_max) - Vec3::from(self.bbox_min)).max_element() / self.tile as f32
+    }
+
+    /// Side of one texel of the largest placed main branch of the level below, in plant units:
+    /// the meshes open when it would be magnified (`levels` = 3). The rest object spans the
+    /// trunk, as tall as the tree, and does not count unless it is all there is; without a
+    /// level below, the tree's texel.
+    pub fn mesh_texel(&self) -> f32 {
+        let only_rest = self.objects.len() == 1;
+        self.placements
+            .iter()
+            .filter_map(|pl| {
+                let o = &self.objects[pl.object as usize];
+                (o.object != REST_OBJECT || only_rest).then(|| {
+                    let scale = pl.affine().matrix3.x_axis.length();
+                    (Vec3::from(o.bbox_max) - Vec3::from(o.bbox_min)).max_element() * scale
+                        / self.tile as f32
+                })
+            })
+            .reduce(f32::max)
+            .unwrap_or_else(|| self.tree_texel())
+    }
+
     /// Bytes of image data (all mips), tree level then the level below.
     pub fn image_bytes(&self) -> (u64, u64) {
         let sum = |sets: &mut dyn Iterator<Item = &Mips>| -> u64 {
@@ -359,7 +384,8 @@ pub fn input_hash(plant: &Plant, p: &HbtParams) -> u64 {
             p.tile,
             p.supersample,
             p.shadow_resolution,
-            p.levels,
+            // Levels 2 and 3 (meshes below the branches) bake the same.
+            p.levels.min(2),
         ])
         .f32s(&[LEAF_TRANSLUCENCY]);
     if p.levels >= 2 {

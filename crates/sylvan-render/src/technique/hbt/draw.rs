@@ -9,9 +9,10 @@ use crate::RenderError;
 use crate::bake::codec::DecodeError;
 use crate::directions::{DirectionLut, DirectionSet};
 use crate::frame::{CASCADES, FrameResources};
-use crate::instances::Instances;
+use crate::instances::{GpuTreeInstance, Instances};
 use crate::pipeline::{self, PassKind, PipelineSpec};
 use crate::technique::common::{Growable, TileAtlas};
+use crate::technique::geometry::{MeshPipelines, SpeciesMeshes};
 use crate::technique::{DrawContext, DrawCounts, FrameInput, Representation};
 use bytemuck::{Pod, Zeroable};
 use glam::{Affine3A, Vec3};
@@ -105,6 +106,11 @@ struct PlantDraw {
     radius: f32,
     /// Tree-level texel size per unit scale (model metres).
     texel: f32,
+    /// Texel size of the level drawn just above the meshes (the largest main branch's, or the
+    /// tree's without a level below), per unit scale: the meshes open when it is magnified.
+    mesh_texel: f32,
+    /// The plant's own meshes (MNP01 §4's polygonal bottom level; with `levels` = 3).
+    meshes: Option<SpeciesMeshes>,
     placements: Vec<PlacementDraw>,
     /// Index of its bake in `prepare`'s list (species with equal bakes share one entry).
     source: usize,
@@ -132,13 +138,20 @@ pub struct Hbt {
     pipeline: wgpu::RenderPipeline,
     shadow_pipeline: wgpu::RenderPipeline,
     bind: wgpu::BindGroup,
+    /// The mesh pipelines (with `levels` = 3).
+    mesh_pipes: Option<MeshPipelines>,
     static_bytes: u64,
     // Per frame (reused; nothing is allocated once the vectors have grown).
     instances: Growable,
     staging: Vec<GpuHbtInstance>,
     sort: Vec<(f32, GpuHbtInstance)>,
     ranges: [Range<u32>; PASSES],
+    /// Trees drawn as meshes: their records (presence set), `mesh_ranges[pass][species]`.
+    mesh_instances: Growable,
+    mesh_staging: Vec<GpuTreeInstance>,
+    mesh_ranges: [Vec<Range<u32>>; PASSES],
     opened: u32,
+    meshed: u32,
 }
 
 impl Hbt {
@@ -150,6 +163,11 @@ impl Hbt {
     /// Trees drawn opened into the level below in the last frame (fully or in transition).
     pub fn opened(&self) -> u32 {
         self.opened
+    }
+
+    /// Trees drawn (fully or in transition) as their meshes in the last frame's camera pass.
+    pub fn meshed(&self) -> u32 {
+        self.meshed
     }
 
     /// Bytes of the visibility structure: the scene's cube-maps (CPU) and the plants' branch
@@ -354,6 +372,7 @@ impl Representation for Hbt {
         let mut tiles: Vec<&[Vec<u8>]> = Vec::new();
         let mut plant_draws: Vec<PlantDraw> = Vec::new();
         let mut species_plant = Vec::with_capacity(plants.len());
+        let mesh_pipes = (params.levels >= 3).then(|| MeshPipelines::new(gpu, frame));
         for (plant, b) in plants.iter().zip(baked) {
             let matches = b.tile == tile
                 && b.view_level == params.view_level
@@ -426,13 +445,26 @@ impl Representation for Hbt {
                     });
                 }
             }
+            let (texel, mesh_texel) = (b.tree_texel(), b.mesh_texel());
+            let meshes = match &mesh_pipes {
+                Some(pipes) => Some(SpeciesMeshes::new(
+                    gpu,
+                    pipes,
+                    plant,
+                    &plant.wood,
+                    &plant.leaves,
+                )?),
+                None => None,
+            };
             species_plant.push(plant_draws.len());
             plant_draws.push(PlantDraw {
                 tree_set,
                 min,
                 max,
                 radius: (max - min).length() * 0.5,
-                texel: 2.0 * (max - min).max_element() * 0.5 / tile as f32,
+                texel,
+                mesh_texel,
+                meshes,
                 placements,
                 source: index,
                 ambient: b.ambient.clone(),
@@ -582,8 +614,16 @@ impl Representation for Hbt {
                 blend: None,
             },
         );
-        let static_bytes =
-            atlas.bytes + species_buffer.size() + frame_buffer.size() + atlas_buffer.size();
+        let static_bytes = atlas.bytes
+            + species_buffer.size()
+            + frame_buffer.size()
+            + atlas_buffer.size()
+            + plant_draws
+                .iter()
+                .filter_map(|p| p.meshes.as_ref())
+                .map(SpeciesMeshes::bytes)
+                .sum::<u64>();
+        let species_count = species_plant.len();
         Ok(Self {
             params: params.clone(),
             views: DirectionLut::new(&views, DirectionLut::DEFAULT_RESOLUTION).map_err(option)?,
@@ -598,18 +638,26 @@ impl Representation for Hbt {
             pipeline: main,
             shadow_pipeline: shadow,
             bind,
+            mesh_pipes,
             static_bytes,
             instances: Growable::new(gpu, "hbt_instances", 1 << 16),
             staging: Vec::new(),
             sort: Vec::new(),
             ranges: std::array::from_fn(|_| 0..0),
+            mesh_instances: Growable::new(gpu, "hbt_mesh_instances", 1 << 12),
+            mesh_staging: Vec::new(),
+            mesh_ranges: std::array::from_fn(|_| vec![0..0; species_count]),
             opened: 0,
+            meshed: 0,
         })
     }
 
     fn update(&mut self, gpu: &Gpu, input: &FrameInput<'_>) -> Result<(), RenderError> {
         self.staging.clear();
+        self.mesh_staging.clear();
         self.opened = 0;
+        self.meshed = 0;
+        let with_meshes = self.params.levels >= 3;
         let sun = input.sun_dir;
         let light = self
             .params
@@ -622,15 +670,30 @@ impl Representation for Hbt {
         {
             scene.set_sun(sun);
         }
+        // A meshed tree casts as meshes into the cascades that shade its own leaves (which the
+        // shader picks by eye distance); elsewhere its shadow is the tree level's (measured on
+        // the default view at 1280×720: meshes into every cascade cost ~40 % more shadow time
+        // for the same ꟻLIP; billboards into every cascade self-shadow the meshes wrongly).
+        let far = input.cascade_far;
+        let receives_in = |pass: usize, d: f32, r: f32| {
+            pass == 0 || {
+                let c = pass - 1;
+                let near = if c == 0 { 0.0 } else { far[c - 1] };
+                d + r >= near && d - r <= far[c]
+            }
+        };
         let p = &self.params;
         let open_px = p.open_texel_pixels;
         let (lo_px, hi_px) = (open_px * (1.0 - p.band), open_px * (1.0 + p.band));
+        let mesh_px = p.mesh_texel_pixels;
+        let (mesh_lo, mesh_hi) = (mesh_px * (1.0 - p.band), mesh_px * (1.0 + p.band));
         for pass in 0..PASSES {
             self.sort.clear();
             for (s, &pi) in self.species_plant.iter().enumerate() {
                 let plant = &self.plants[pi];
                 let records = input.instances.records(pass, s);
                 let ids = input.instances.ids(pass, s);
+                let mesh_start = self.mesh_staging.len() as u32;
                 for (rec, &id) in records.iter().zip(ids) {
                     let (c, sn, scale) = (rec.rot[0], rec.rot[1], rec.base_scale[3]);
                     let tree = PlacedTree::from_record(s, rec.base_scale, rec.rot);
@@ -638,7 +701,29 @@ impl Representation for Hbt {
                         .to_world
                         .transform_point3((plant.min + plant.max) * 0.5);
                     let eye = input.eye - world_centre;
-                    let presence = rec.rot[3];
+                    let dist = eye.length().max(1e-3);
+                    // MNP01 §4: the polygonal level opens when the level above it would be
+                    // magnified (decided from the camera in every pass, so a tree casts what
+                    // it shows).
+                    let mesh = if with_meshes && receives_in(pass, dist, plant.radius * scale) {
+                        let px = plant.mesh_texel * scale * input.pixels_per_metre / dist;
+                        smoothstep(mesh_lo, mesh_hi, px)
+                    } else {
+                        0.0
+                    };
+                    let mut presence = rec.rot[3];
+                    if mesh * presence > 0.002 {
+                        let mut r = *rec;
+                        r.rot[3] = mesh * presence;
+                        self.mesh_staging.push(r);
+                        if pass == 0 {
+                            self.meshed += 1;
+                        }
+                    }
+                    presence *= 1.0 - mesh;
+                    if presence <= 0.002 {
+                        continue;
+                    }
                     if pass > 0 {
                         // Shadow casters are seen from the sun: only coverage matters, so the
                         // view weights go in the first column.
@@ -665,7 +750,6 @@ impl Representation for Hbt {
                         continue;
                     }
                     // MNP01 §4: open the tree when its texels would be magnified.
-                    let dist = eye.length().max(1e-3);
                     let texel_px = plant.texel * scale * input.pixels_per_metre / dist;
                     let open = if plant.placements.is_empty() {
                         0.0
@@ -740,6 +824,7 @@ impl Representation for Hbt {
                         self.sort.push((eye_o.length_squared(), inst));
                     }
                 }
+                self.mesh_ranges[pass][s] = mesh_start..self.mesh_staging.len() as u32;
             }
             if pass == 0 {
                 // MNP01 §5: back to front (trees and the objects of opened trees together).
@@ -749,6 +834,8 @@ impl Representation for Hbt {
             self.staging.extend(self.sort.iter().map(|x| x.1));
             self.ranges[pass] = start..self.staging.len() as u32;
         }
+        self.mesh_instances
+            .write(gpu, bytemuck::cast_slice(&self.mesh_staging))?;
         self.instances
             .write(gpu, bytemuck::cast_slice(&self.staging))
     }
@@ -762,7 +849,7 @@ impl Representation for Hbt {
     }
 
     fn bytes(&self) -> u64 {
-        self.static_bytes + self.instances.buffer.size()
+        self.static_bytes + self.instances.buffer.size() + self.mesh_instances.buffer.size()
     }
 }
 
@@ -773,16 +860,46 @@ impl Hbt {
         ctx: &DrawContext<'_>,
         shadow: bool,
     ) -> DrawCounts {
+        pass.set_bind_group(0, ctx.frame_bind, &[]);
+        // Opaque first: the trees drawn as meshes, then the billboards over them.
+        let mut counts = DrawCounts::default();
+        if let Some(pipes) = &self.mesh_pipes {
+            let (wood, leaf) = pipes.for_pass(shadow);
+            for (pipeline, is_wood) in [(wood, true), (leaf, false)] {
+                pass.set_pipeline(pipeline);
+                for (s, &pi) in self.species_plant.iter().enumerate() {
+                    let Some(meshes) = &self.plants[pi].meshes else {
+                        continue;
+                    };
+                    let mesh = if is_wood {
+                        &meshes.wood
+                    } else {
+                        &meshes.leaves
+                    };
+                    let Some(mesh) = mesh else { continue };
+                    let inst = self.mesh_ranges[ctx.pass][s].clone();
+                    if inst.is_empty() {
+                        continue;
+                    }
+                    pass.set_bind_group(1, &meshes.material, &[]);
+                    counts += mesh.draw_range(
+                        pass,
+                        0..mesh.index_count,
+                        &self.mesh_instances.buffer,
+                        inst,
+                    );
+                }
+            }
+        }
         let r = self.ranges[ctx.pass].clone();
         if r.is_empty() {
-            return DrawCounts::default();
+            return counts;
         }
         let quads = if !shadow && self.params.projection == HbtProjection::Cross {
             3
         } else {
             1
         };
-        pass.set_bind_group(0, ctx.frame_bind, &[]);
         pass.set_pipeline(if shadow {
             &self.shadow_pipeline
         } else {
@@ -792,9 +909,10 @@ impl Hbt {
         pass.set_vertex_buffer(1, self.instances.buffer.slice(..));
         let n = (r.end - r.start) as u64;
         pass.draw(0..quads * 6, r);
-        DrawCounts {
+        counts += DrawCounts {
             draw_calls: 1,
             triangles: n * quads as u64 * 2,
-        }
+        };
+        counts
     }
 }

@@ -212,6 +212,11 @@ fn fetch(tile: u32, uv: vec2<f32>, lod: f32) -> vec4<f32> {
     return textureSampleLevel(atlas_color, atlas_sampler, a, i32(tile / atlas.tiles.z), lod);
 }
 
+// Opacity of coverage `cover` drawn with share `w` of its optical depth.
+fn presence_alpha(cover: f32, w: f32) -> f32 {
+    return 1.0 - pow(1.0 - min(cover, 0.995), w);
+}
+
 fn inside(uv: vec2<f32>) -> bool {
     return all(uv >= vec2<f32>(0.0)) && all(uv <= vec2<f32>(1.0));
 }
@@ -254,13 +259,16 @@ fn fs_hbt(in: HbtOut) -> @location(0) vec4<f32> {
         sky = sky + a * sky_texel.rgb;
         ground = ground + a * fetch(sp.info.z + views + view, uv, lod).rgb;
     }
-    var alpha = min(direct.a * in.extra.y, 1.0);
+    // Presence (a level's share during a transition) scales optical depth, not opacity: two
+    // levels cross-fading over each other keep the object's coverage, where scaling opacity
+    // thinned it (one pine mid-switch: 44 % less darkening against the sky than the reference).
+    var alpha = presence_alpha(direct.a, in.extra.y);
     if (in.rows.y - in.rows.x == 1u) {
         // Cross projection: this plane carries the fraction `rows_weight` of the object, as
         // optical depth (as boxtree's planes), so planes over each other add up to the image's
         // opacity rather than to a third of it each.
-        let cover = min(direct.a / max(rows_weight, 1e-6), 0.995);
-        alpha = (1.0 - pow(1.0 - cover, rows_weight)) * in.extra.y;
+        let cover = direct.a / max(rows_weight, 1e-6);
+        alpha = presence_alpha(cover, rows_weight * in.extra.y);
     }
     if (alpha < 0.002) {
         discard;
@@ -307,7 +315,7 @@ fn fs_hbt_shadow(in: HbtOut) {
         }
     }
     // The tree's tint seed decorrelates the thresholds of overlapping trees.
-    if (alpha * in.extra.y <= hash13(vec3<f32>(in.pos.xy, 3.0 + 97.0 * in.extra.x))) {
+    if (presence_alpha(alpha, in.extra.y) <= hash13(vec3<f32>(in.pos.xy, 3.0 + 97.0 * in.extra.x))) {
         discard;
     }
 }

@@ -1,6 +1,6 @@
 //! Technique `hbt`: MNP01 — Meyer, Neyret, Poulin, *Interactive Rendering of Trees with
-//! Shading and Shadows*, EGWR 2001. Two levels of the hierarchy: the tree, and below it its
-//! main branches and the rest of the plant.
+//! Shading and Shadows*, EGWR 2001. Three levels of the hierarchy: the tree, below it its main
+//! branches and the rest of the plant, and at the bottom the plant's own meshes.
 //!
 //! Implements:
 //! - §3.1 the **bidirectional texture function** of a base object: one billboard per (view
@@ -13,18 +13,22 @@
 //!   with the reference's model (Lambert + leaf transmission) times its visibility from that
 //!   light (5×5 PCF in the light's depth map: soft self-shadows), then box-filtered down to the
 //!   tile and mip-mapped;
-//! - §3.2/§7 the **level below** ([`HbtParams::levels`] = 2, the default): representative main
-//!   branches and the plant's rest, each with its BTF, and their placements
-//!   ([`bake::branch_level`]);
+//! - §3.2/§7 the **level below** ([`HbtParams::levels`] ≥ 2): representative main branches
+//!   and the plant's rest, each with its BTF, and their placements ([`bake::branch_level`]);
+//!   and (`levels` = 3, the default) §4's polygonal bottom: "the objects in the opened levels
+//!   of the hierarchy, either polygonal meshes or BTF" — the plant's meshes, drawn with the
+//!   `geometry` technique's pipelines;
 //! - §3.3/§6.2 the **hierarchy of visibility cube-maps** ([`visibility`]): for each branch
 //!   placement (baked) and each placed tree (built when the scene is placed, [`scene`]), a
 //!   cube-map at each of the 8 corners of its box holding the opacity of the rest of its level —
 //!   the other branches of the tree, or the other trees and the terrain — from the occluders'
 //!   own baked coverage;
 //! - §4 **LOD by projected size**: a tree opens into the level below when one of its texels
-//!   would cover more than [`HbtParams::open_texel_pixels`] pixels, cross-faded over
-//!   [`HbtParams::band`]; §5 every billboard (trees and opened trees' objects) drawn back to
-//!   front in one instanced draw;
+//!   would cover more than [`HbtParams::open_texel_pixels`] pixels, and into its meshes when
+//!   one texel of its largest main branch would cover more than
+//!   [`HbtParams::mesh_texel_pixels`], each cross-faded over [`HbtParams::band`] (billboards
+//!   by optical depth, meshes by per-leaf presence); §5 the meshes first (opaque), then every
+//!   billboard (trees and opened trees' objects) back to front in one instanced draw;
 //! - §4.1 and the appendix, **reconstruction**: per billboard and frame, the 3 view samples and
 //!   3 light samples enclosing the (object-space) eye and sun directions with their barycentric
 //!   weights (MNP01's precomputed table, [`crate::directions::DirectionLut::lookup`], on the
@@ -44,9 +48,15 @@
 //! - **Representative branches.** An L-system tree has as many distinct main branches as its
 //!   parameters vary (26 on the pine, 223 on the prunus); MNP01's pine was built from a few
 //!   instanced ones. At most [`HbtParams::max_branch_objects`] are baked, and the others are
-//!   drawn with the representative of their size group, scaled. Only two levels (MNP01 §7 has
-//!   three plus needles); nearer than the branches' own magnification the `auto` chain's
-//!   geometry band takes over.
+//!   drawn with the representative of their size group, scaled (16 by default: with 6, a pine
+//!   70 px tall drawn from its branches was visibly wrong, ꟻLIP 0.059 against 0.049).
+//! - **Two BTF levels, then meshes** (MNP01 §7 has three BTF levels: small branches too). The
+//!   meshes open early — when the main branches' texels would cover 0.5 px, before they are
+//!   magnified: measured on the default view at 1280×720, magnified branch BTFs are both slower
+//!   (overlapping billboards, 12 fetches per fragment) and further from the reference than the
+//!   meshes (ꟻLIP 0.094 with the BTF levels only, 0.049 with meshes; BENCHMARKS.md). With the
+//!   pine the branch level is then drawn over a narrow range of distances only. A tree opens
+//!   into its meshes as a whole, not branch by branch.
 //! - **Each level is baked from geometry**, not by rendering the lower level's BTFs with the
 //!   runtime algorithm (§6.1); consistency between levels is measured instead (a test bounds
 //!   the ꟻLIP between the two levels at the switching distance by each level's own error).
@@ -61,7 +71,9 @@
 //!   the memory and build time). Occluders: at most 48 nearest within 5 bounding radii.
 //! - **Shadow casting** (the ground's alpha shadow map, §5): trees cast into the cascades with
 //!   stochastic (screen-door) alpha from the tree-level coverage of the view sample nearest the
-//!   sun; opened trees cast at the tree level.
+//!   sun; trees opened into branches cast at the tree level; trees drawn as meshes cast as
+//!   meshes into the cascades that shade their own leaves (by eye distance), elsewhere from
+//!   their tree BTF.
 //! - **Self-shadowing** uses depth maps with PCF rather than MNP01's ray tracer (§6.1).
 //! - **Ambient occlusion inside an object** is the reference's crown-position estimate
 //!   (`crown_occlusion` in `frame.wgsl`) evaluated at each baked sample (in the object's own
@@ -76,8 +88,8 @@
 //! Cost: bake = V + L rasterisations plus a CPU lighting pass of V·L·(tile·ss)² samples per
 //! object, plus the branch cube-maps; per frame, 2 direction look-ups per billboard (CPU) and
 //! 8 cube-map look-ups per opened branch, one instanced draw per pass, up to 9 + 3 texture
-//! fetches per fragment. Memory (default, per plant): tree BTF 66 × 18 at 32 px = 7.2 MB;
-//! 7 objects × 18 × 18 = 13.8 MB; branch cube-maps 6·8² bytes × 8 corners per placement; the
+//! fetches per fragment; meshes as `geometry`. Memory (default, per plant): tree BTF 66 × 18 at
+//! 32 px = 7.2 MB; up to 17 objects × 18 × 18 = 33 MB; the plant's meshes; branch cube-maps 6·8² bytes × 8 corners per placement; the
 //! scene's cube-maps 3 KB per tree (CPU). Figures in BENCHMARKS.md.
 
 pub mod bake;
@@ -153,7 +165,9 @@ impl HbtShadows {
 #[derive(Debug, Clone, PartialEq)]
 pub struct HbtParams {
     /// Levels of the hierarchy: 1, the tree; 2, also the level below (representative main
-    /// branches and the plant's rest), opened when the tree's texels would be magnified.
+    /// branches and the plant's rest), opened when the tree's texels would be magnified; 3, also
+    /// the plant's own meshes (MNP01 §4's polygonal bottom), opened when the largest main
+    /// branch's texels would be (without a level below: the tree's). 2 and 3 share a bake.
     pub levels: u32,
     /// View-direction set of the level below: subdivision level 0..=3.
     pub branch_view_level: u32,
@@ -167,7 +181,10 @@ pub struct HbtParams {
     /// Draw only: a tree opens into its branches when one of its texels would cover more than
     /// this many pixels (MNP01 §4: when the billboard would be magnified).
     pub open_texel_pixels: f32,
-    /// Draw only: the cross-fade band around that switch, relative (0 = hard switch).
+    /// Draw only (`levels` = 3): a tree is drawn as its meshes when one texel of its largest
+    /// main branch would cover more than this many pixels.
+    pub mesh_texel_pixels: f32,
+    /// Draw only: the cross-fade band around those switches, relative (0 = hard switch).
     pub band: f32,
     /// Draw only: received sun shadows from cube-maps or cascades.
     pub shadows: HbtShadows,
@@ -194,12 +211,17 @@ pub struct HbtParams {
 impl Default for HbtParams {
     fn default() -> Self {
         Self {
-            levels: 2,
+            // Measured on the default view at 1280×720 (BENCHMARKS.md): with the meshes below
+            // the branches ꟻLIP 0.050 at 5.5× geometry's speed; without, 0.098 at 4.6×.
+            levels: 3,
             branch_view_level: 1,
             branch_light_level: 1,
-            max_branch_objects: 6,
+            max_branch_objects: 16,
             cube_resolution: 8,
             open_texel_pixels: 2.0,
+            // 0.5: ꟻLIP 0.050 at 1280×720; 1.0: 0.076 and slower (more branch billboards);
+            // 0.35: 0.044, and the branch level no longer drawn at all for the pine.
+            mesh_texel_pixels: 0.5,
             band: 0.3,
             // Measured: MNP01's 8-corner interpolation under-darkens a tree in another's shadow
             // (0.158 vs the reference's 0.289 on the test grove; cascades 0.261), see BENCHMARKS.md.
@@ -222,9 +244,9 @@ impl HbtParams {
     /// Checks every value; the error names the option and the valid range.
     pub fn validate(&self) -> Result<(), RenderError> {
         let bad = |m: String| Err(RenderError::Option(m));
-        if !(1..=2).contains(&self.levels) {
+        if !(1..=3).contains(&self.levels) {
             return bad(format!(
-                "hbt levels {}: must be 1 (the tree) or 2 (tree and main branches)",
+                "hbt levels {}: must be 1 (the tree), 2 (tree and main branches) or 3 (also the plant's meshes)",
                 self.levels
             ));
         }
@@ -245,6 +267,12 @@ impl HbtParams {
             return bad(format!(
                 "hbt open texel pixels {}: must be 0.1 to 16",
                 self.open_texel_pixels
+            ));
+        }
+        if !(self.mesh_texel_pixels.is_finite() && (0.1..=16.0).contains(&self.mesh_texel_pixels)) {
+            return bad(format!(
+                "hbt mesh texel pixels {}: must be 0.1 to 16",
+                self.mesh_texel_pixels
             ));
         }
         if !(self.band.is_finite() && (0.0..=0.9).contains(&self.band)) {
