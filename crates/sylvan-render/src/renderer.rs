@@ -115,6 +115,8 @@ pub struct FrameStats {
     pub visibility_ms: f64,
     /// Trees drawn opened into a lower level of their hierarchy (`hbt`), this frame.
     pub trees_opened: u32,
+    /// Of those, trees drawn as their meshes (`hbt` level 3), this frame.
+    pub trees_meshed: u32,
 }
 
 struct Targets {
@@ -436,11 +438,12 @@ impl Renderer {
         gpu.check()?;
 
         let asset_bytes = self.technique.bytes();
-        let (visibility_bytes, visibility_ms, trees_opened) = self.technique.hierarchy_stats();
+        let h = self.technique.hierarchy_stats();
         Ok(FrameStats {
-            visibility_bytes,
-            visibility_ms,
-            trees_opened,
+            visibility_bytes: h.visibility_bytes,
+            visibility_ms: h.visibility_ms,
+            trees_opened: h.trees_opened,
+            trees_meshed: h.trees_meshed,
             frame_ms,
             cpu_ms,
             timer: self.timer.kind(),

@@ -231,17 +231,26 @@ impl AnyTechnique {
         }
     }
 
-    /// `hbt`'s visibility structure (CPU bytes, build milliseconds) and trees opened into the
-    /// level below this frame; zeros for other techniques.
-    pub(crate) fn hierarchy_stats(&self) -> (u64, f64, u32) {
+    /// `hbt`'s visibility structure and the trees drawn from lower levels this frame; zeros
+    /// for other techniques.
+    pub(crate) fn hierarchy_stats(&self) -> HierarchyStats {
         match self {
-            Self::Hbt(t) => (t.visibility_bytes(), t.visibility_build_ms(), t.opened()),
-            Self::Auto(c) => c
-                .techniques
-                .iter()
-                .map(AnyTechnique::hierarchy_stats)
-                .fold((0, 0.0, 0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2)),
-            _ => (0, 0.0, 0),
+            Self::Hbt(t) => HierarchyStats {
+                visibility_bytes: t.visibility_bytes(),
+                visibility_ms: t.visibility_build_ms(),
+                trees_opened: t.opened(),
+                trees_meshed: t.meshed(),
+            },
+            Self::Auto(c) => c.techniques.iter().map(AnyTechnique::hierarchy_stats).fold(
+                HierarchyStats::default(),
+                |a, b| HierarchyStats {
+                    visibility_bytes: a.visibility_bytes + b.visibility_bytes,
+                    visibility_ms: a.visibility_ms + b.visibility_ms,
+                    trees_opened: a.trees_opened + b.trees_opened,
+                    trees_meshed: a.trees_meshed + b.trees_meshed,
+                },
+            ),
+            _ => HierarchyStats::default(),
         }
     }
 
@@ -275,4 +284,17 @@ impl Chain {
         }
         counts
     }
+}
+
+/// What [`AnyTechnique::hierarchy_stats`] reports.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct HierarchyStats {
+    /// CPU bytes of the visibility cube-maps.
+    pub(crate) visibility_bytes: u64,
+    /// Milliseconds to build the scene's.
+    pub(crate) visibility_ms: f64,
+    /// Trees opened into a lower level (branches or meshes), this frame.
+    pub(crate) trees_opened: u32,
+    /// Trees drawn as their meshes (fully or in transition), this frame's camera pass.
+    pub(crate) trees_meshed: u32,
 }

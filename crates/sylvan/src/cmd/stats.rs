@@ -57,9 +57,12 @@ pub struct Report {
     pub visibility_bytes: Option<u64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub visibility_ms: Option<f64>,
-    /// `hbt`: trees drawn opened into their branches (last frame).
+    /// `hbt`: trees drawn opened into a lower level, branches or meshes (last frame).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub trees_opened: Option<u32>,
+    /// `hbt`: of those, trees drawn as their meshes (last frame).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub trees_meshed: Option<u32>,
     pub adapter: String,
     /// The camera path replayed (`bench --path`), as given.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -132,6 +135,8 @@ impl Report {
             visibility_ms: (last.visibility_bytes > 0).then_some(last.visibility_ms),
             trees_opened: (last.visibility_bytes > 0 || last.trees_opened > 0)
                 .then_some(last.trees_opened),
+            trees_meshed: (last.visibility_bytes > 0 || last.trees_meshed > 0)
+                .then_some(last.trees_meshed),
             adapter,
             path: None,
             per_frame: None,

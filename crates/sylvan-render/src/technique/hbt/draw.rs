@@ -160,7 +160,8 @@ impl Hbt {
         self.instances.reallocations
     }
 
-    /// Trees drawn opened into the level below in the last frame (fully or in transition).
+    /// Trees drawn opened into a level below the tree — branches or meshes — in the last frame
+    /// (fully or in transition).
     pub fn opened(&self) -> u32 {
         self.opened
     }
@@ -718,6 +719,7 @@ impl Representation for Hbt {
                         self.mesh_staging.push(r);
                         if pass == 0 {
                             self.meshed += 1;
+                            self.opened += 1;
                         }
                     }
                     presence *= 1.0 - mesh;
@@ -783,7 +785,9 @@ impl Representation for Hbt {
                     if open * presence <= 0.002 {
                         continue;
                     }
-                    self.opened += 1;
+                    if mesh * rec.rot[3] <= 0.002 {
+                        self.opened += 1;
+                    }
                     let sun_model = to_model_dir(sun, c, sn);
                     let res = plant.cube_resolution as usize;
                     for pl in &plant.placements {
