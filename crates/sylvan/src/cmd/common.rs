@@ -104,6 +104,9 @@ pub struct BakeArgs {
     /// hbt (levels 3): a tree is drawn as its meshes when one texel of its largest main branch would cover more than this many pixels.
     #[arg(long, default_value_t = HbtParams::default().mesh_texel_pixels)]
     pub hbt_mesh_pixels: f32,
+    /// hbt: cross-fade band around each level switch, relative to the switch (0 = hard switches).
+    #[arg(long, default_value_t = HbtParams::default().band)]
+    pub hbt_band: f32,
     /// hbt: received sun shadows from `cascades` (measured closer to the reference) or `cubemaps` (MNP01 §3.3's 8-corner interpolation); the sky term always comes from the cube-maps.
     #[arg(long, default_value = "cascades")]
     pub hbt_shadows: String,
@@ -189,6 +192,7 @@ impl BakeArgs {
             cube_resolution: self.hbt_cube,
             open_texel_pixels: self.hbt_open_pixels,
             mesh_texel_pixels: self.hbt_mesh_pixels,
+            band: self.hbt_band,
             shadows,
             tile: self.hbt_tile,
             projection,
