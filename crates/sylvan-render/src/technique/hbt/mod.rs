@@ -65,7 +65,7 @@
 //!   the sun by the object's bounding radius (its own shadowing is in the BTF); the sky term
 //!   still comes from the cube-maps. MNP01's sun-from-cube-maps is [`HbtShadows::CubeMaps`]:
 //!   measured, its 8-corner interpolation spreads a neighbour's shadow over the whole crown and
-//!   under-darkens a tree in another's shadow (0.158 vs the reference's 0.289; cascades 0.261).
+//!   under-darkens a tree in another's shadow (0.080 vs the reference's 0.289; cascades 0.301).
 //! - **Cube-maps are evaluated on the CPU** per texel from the occluders' baked coverage rather
 //!   than rendered (§6.2); 8² per face by default (MNP01: 32², same ꟻLIP here at a quarter of
 //!   the memory and build time). Occluders: at most 48 nearest within 5 bounding radii.
@@ -224,7 +224,7 @@ impl Default for HbtParams {
             mesh_texel_pixels: 0.5,
             band: 0.3,
             // Measured: MNP01's 8-corner interpolation under-darkens a tree in another's shadow
-            // (0.158 vs the reference's 0.289 on the test grove; cascades 0.261), see BENCHMARKS.md.
+            // (0.080 vs the reference's 0.289 on the test grove; cascades 0.301), see BENCHMARKS.md.
             shadows: HbtShadows::Cascades,
             // 66 views: with 18 (45° apart) the blend of 3 differing silhouettes blurs trees
             // and their shadows (FLIP on the default view 0.107 with 18, 0.082 with 66).
