@@ -60,9 +60,28 @@ for sun in 200,40 20,40 110,30 290,30 200,8 20,8 110,70 0,88; do
 done
 
 echo
+echo "## Tree level baked from geometry or rendered from the branches (MNP01 §6.1), tree level drawn alone"
+echo "| sun az/el | height px | from geometry (default) | from branches (--hbt-tree-from branches) |"
+echo "|---|---|---|---|"
+for sun in 200,40 20,8; do
+  for h in 60 30; do
+    d=$(python3 -c "import math; print('%.1f' % (16*480/(2*math.tan(math.radians(20)))/$h))")
+    z=$(python3 -c "print('%.2f' % (1100-$d))")
+    tag="${sun/,/-}-$h"
+    crop=(--crop "$(python3 -c "h=$h; s=int(1.3*h); print(f'{max(320-s//2,0)},{max(240-s//2,0)},{s},{s}')")")
+    row="| $sun | $h |"
+    for from in geometry branches; do
+      $S render $SCENE --size 640x480 --camera "1100,8,$z:1100,8,1100" --sun "$sun" --technique hbt --hbt-levels 2 --hbt-open-pixels 16 --hbt-tree-from $from --out "$OUT/tree-from-$from-$tag.png" 2>>"$OUT/log.txt"
+      row="$row $(flip "$OUT/relight-$tag-ref.png" "$OUT/tree-from-$from-$tag.png" "${crop[@]}") |"
+    done
+    echo "$row"
+  done
+done
+
+echo
 echo "## Default scene: FLIP vs geometry --spp 16"
-echo "| size | geometry 1 spp | hbt (default: 3 levels, sun from cascades) | hbt BTF levels only (levels 2) | hbt levels 2, sun from cube-maps | hbt level 1 only |"
-echo "|---|---|---|---|---|---|"
+echo "| size | geometry 1 spp | hbt (default: 3 levels, sun from cascades) | hbt BTF levels only (levels 2) | hbt levels 2, sun from cube-maps | hbt level 1 only | hbt, tree level from branches |"
+echo "|---|---|---|---|---|---|---|"
 for size in 480x270 1280x720; do
   ref="$REFS/default-$size-ref.png"
   [ -f "$ref" ] || $S render --size $size --spp 16 --out "$ref" 2>>"$OUT/log.txt"
@@ -71,7 +90,8 @@ for size in 480x270 1280x720; do
   $S render --size $size --technique hbt --hbt-levels 2 --out "$OUT/default-$size-hbt-l2.png" 2>>"$OUT/log.txt"
   $S render --size $size --technique hbt --hbt-levels 2 --hbt-shadows cubemaps --out "$OUT/default-$size-hbt-cubemaps.png" 2>>"$OUT/log.txt"
   $S render --size $size --technique hbt --hbt-levels 1 --out "$OUT/default-$size-hbt-l1.png" 2>>"$OUT/log.txt"
-  echo "| $size | $(flip "$ref" "$REFS/default-$size-geometry.png") | $(flip "$ref" "$OUT/default-$size-hbt.png") | $(flip "$ref" "$OUT/default-$size-hbt-l2.png") | $(flip "$ref" "$OUT/default-$size-hbt-cubemaps.png") | $(flip "$ref" "$OUT/default-$size-hbt-l1.png") |"
+  $S render --size $size --technique hbt --hbt-tree-from branches --out "$OUT/default-$size-hbt-composed.png" 2>>"$OUT/log.txt"
+  echo "| $size | $(flip "$ref" "$REFS/default-$size-geometry.png") | $(flip "$ref" "$OUT/default-$size-hbt.png") | $(flip "$ref" "$OUT/default-$size-hbt-l2.png") | $(flip "$ref" "$OUT/default-$size-hbt-cubemaps.png") | $(flip "$ref" "$OUT/default-$size-hbt-l1.png") | $(flip "$ref" "$OUT/default-$size-hbt-composed.png") |"
 done
 python3 - "$OUT/default-480x270-hbt.json" <<'PY'
 import json, sys

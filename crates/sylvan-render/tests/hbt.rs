@@ -760,6 +760,32 @@ fn levels_differ_less_at_the_switch_than_either_differs_from_the_reference() {
         switch < e1.max(e2),
         "tree → branches changes the tree by {switch:.4}, more than the levels' own errors {e1:.4} / {e2:.4}"
     );
+    // MNP01 §6.1: the tree level rendered from the branches shades like them, so the switch
+    // between the two changes the picture less than with a tree level baked from geometry.
+    let composed = HbtParams {
+        tree_from_branches: true,
+        ..p.clone()
+    };
+    let (switch_c, e1c, e2c) = at_the_switch(
+        &gpu,
+        "tree-branches-composed",
+        baked.tree_texel(),
+        p.open_texel_pixels,
+        |p, px| HbtParams {
+            levels: 2,
+            open_texel_pixels: px,
+            ..p.clone()
+        },
+        &composed,
+    );
+    assert!(
+        switch_c < e1c.max(e2c),
+        "tree (from branches) → branches changes the tree by {switch_c:.4}, more than the levels' own errors {e1c:.4} / {e2c:.4}"
+    );
+    assert!(
+        switch_c < switch,
+        "a tree level rendered from the branches must switch to them more smoothly ({switch_c:.4}) than one baked from geometry ({switch:.4})"
+    );
     // Main branches → the plant's meshes.
     let (switch, e2, e3) = at_the_switch(
         &gpu,

@@ -107,6 +107,9 @@ pub struct BakeArgs {
     /// hbt: cross-fade band around each level switch, relative to the switch (0 = hard switches).
     #[arg(long, default_value_t = HbtParams::default().band)]
     pub hbt_band: f32,
+    /// hbt: bake the tree level from `geometry` or by rendering its `branches` with the runtime algorithm (MNP01 §6.1).
+    #[arg(long, default_value = "geometry")]
+    pub hbt_tree_from: String,
     /// hbt: received sun shadows from `cascades` (measured closer to the reference) or `cubemaps` (MNP01 §3.3's 8-corner interpolation); the sky term always comes from the cube-maps.
     #[arg(long, default_value = "cascades")]
     pub hbt_shadows: String,
@@ -181,8 +184,14 @@ impl BakeArgs {
                 Some([x, y, z])
             }
         };
+        let tree_from_branches = match self.hbt_tree_from.as_str() {
+            "geometry" => false,
+            "branches" => true,
+            other => anyhow::bail!("--hbt-tree-from {other}: expected `geometry` or `branches`"),
+        };
         let p = HbtParams {
             fixed_light,
+            tree_from_branches,
             levels: self.hbt_levels,
             view_level: level("hbt-views", self.hbt_views)?,
             light_level: level("hbt-lights", self.hbt_lights)?,

@@ -386,6 +386,7 @@ pub fn input_hash(plant: &Plant, p: &HbtParams) -> u64 {
             p.shadow_resolution,
             // Levels 2 and 3 (meshes below the branches) bake the same.
             p.levels.min(2),
+            (p.levels >= 2 && p.tree_from_branches) as u32,
         ])
         .f32s(&[LEAF_TRANSLUCENCY]);
     if p.levels >= 2 {
@@ -557,7 +558,7 @@ fn samples(image: &TileImage, frame: &PlaneFrame) -> Vec<Sample> {
 
 /// Box-filters a supersampled premultiplied image (`n·ss` per side) to `n` and builds the
 /// quantised mip chain.
-fn downsample(hi: &[[f32; 4]], n: usize, ss: usize) -> Mips {
+pub(super) fn downsample(hi: &[[f32; 4]], n: usize, ss: usize) -> Mips {
     let big = n * ss;
     let inv = 1.0 / (ss * ss) as f32;
     let mut color = vec![[0.0f32; 4]; n * n];
@@ -993,7 +994,14 @@ pub fn bake(
     let top = 2 * views.len() + lights.len();
     let per_object = 2 * bviews.len() + blights.len();
     let total = top + per_object * level.objects.len();
-    let (direct, ambient) = bake_btf(gpu, plant, p, &views, &lights, &mut |d| progress(d, total))?;
+    // MNP01 §6.1: with `tree_from_branches` the tree level is rendered from the level below
+    // once that is baked (below); otherwise from geometry, now.
+    let compose = p.levels >= 2 && p.tree_from_branches && !level.placements.is_empty();
+    let (mut direct, mut ambient) = if compose {
+        (Vec::new(), Vec::new())
+    } else {
+        bake_btf(gpu, plant, p, &views, &lights, &mut |d| progress(d, total))?
+    };
     let mut objects = Vec::with_capacity(level.objects.len());
     for (k, (object, sub, uses)) in level.objects.iter().enumerate() {
         let done = top + per_object * k;
@@ -1029,6 +1037,25 @@ pub fn bake(
             p.cube_resolution as usize,
         )
     };
+    if compose {
+        (direct, ambient) = super::compose::tree_level(
+            &super::compose::LevelBelow {
+                objects: &objects,
+                placements: &placements,
+                cubes: &cubes,
+                cube_resolution: p.cube_resolution,
+                branch_views: &bviews,
+                branch_lights: &blights,
+            },
+            &views,
+            &lights,
+            (Vec3::from(plant.bbox_min), Vec3::from(plant.bbox_max)),
+            p.tile,
+            p.supersample.min(2),
+            p.min_weight,
+        );
+        progress(total, total);
+    }
     Ok(HbtBaked {
         tile: p.tile,
         view_level: p.view_level,

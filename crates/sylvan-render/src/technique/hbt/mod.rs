@@ -7,7 +7,8 @@
 //!   sample, light sample) pair of the shared direction sets ([`crate::directions`], 6/18/66/258
 //!   samples), holding the object's colour lit by that light with **self-shadowing** inside it,
 //!   plus the **ambient BTF** per view sample, sun and sky kept apart as §3.1 asks ([`bake`]);
-//! - §6.1 building it: each view is rasterised once by the shared baker ([`crate::bake`]) into a
+//! - §6.1 building it (the lowest level, and by default every level): each view is
+//!   rasterised once by the shared baker ([`crate::bake`]) into a
 //!   supersampled albedo/normal/depth G-buffer; each light sample gets an orthographic depth map
 //!   of the object (alpha-tested leaves, so alpha-aware); every covered G-buffer sample is lit
 //!   with the reference's model (Lambert + leaf transmission) times its visibility from that
@@ -57,9 +58,13 @@
 //!   meshes (ꟻLIP 0.094 with the BTF levels only, 0.049 with meshes; BENCHMARKS.md). With the
 //!   pine the branch level is then drawn over a narrow range of distances only. A tree opens
 //!   into its meshes as a whole, not branch by branch.
-//! - **Each level is baked from geometry**, not by rendering the lower level's BTFs with the
-//!   runtime algorithm (§6.1); consistency between levels is measured instead (a test bounds
-//!   the ꟻLIP between the two levels at the switching distance by each level's own error).
+//! - **By default each level is baked from geometry.** MNP01 §6.1 renders a higher level from
+//!   the lower level's BTFs with the runtime algorithm so that levels shade alike:
+//!   [`HbtParams::tree_from_branches`] does that for the tree level (`compose.rs`, on the CPU).
+//!   Measured, it switches to the branches more smoothly (ꟻLIP between the levels at the switch
+//!   0.104 against 0.119) but is blurrier, the branches' reconstruction being resampled and
+//!   reconstructed again (one pine 30 px tall, back-lit: 0.080 against 0.068; default view
+//!   0.0516 against 0.0492 at 1280×720), so it is not the default.
 //! - **Received sun shadows come from the cascaded shadow maps by default**
 //!   ([`HbtShadows::Cascades`]), sampled once per fragment at the billboard point moved towards
 //!   the sun by the object's bounding radius (its own shadowing is in the BTF); the sky term
@@ -93,6 +98,7 @@
 //! scene's cube-maps 3 KB per tree (CPU). Figures in BENCHMARKS.md.
 
 pub mod bake;
+mod compose;
 mod draw;
 pub mod scene;
 pub mod visibility;
@@ -186,6 +192,9 @@ pub struct HbtParams {
     pub mesh_texel_pixels: f32,
     /// Draw only: the cross-fade band around those switches, relative (0 = hard switch).
     pub band: f32,
+    /// With `levels` ≥ 2: bake the tree level by rendering the level below with the runtime
+    /// algorithm (MNP01 §6.1), so the two levels shade alike; otherwise from geometry.
+    pub tree_from_branches: bool,
     /// Draw only: received sun shadows from cube-maps or cascades.
     pub shadows: HbtShadows,
     /// View-direction set: subdivision level 0..=3 (6, 18, 66 or 258 samples).
@@ -223,6 +232,7 @@ impl Default for HbtParams {
             // 0.35: 0.044, and the branch level no longer drawn at all for the pine.
             mesh_texel_pixels: 0.5,
             band: 0.3,
+            tree_from_branches: false,
             // Measured: MNP01's 8-corner interpolation under-darkens a tree in another's shadow
             // (0.080 vs the reference's 0.289 on the test grove; cascades 0.301), see BENCHMARKS.md.
             shadows: HbtShadows::Cascades,
