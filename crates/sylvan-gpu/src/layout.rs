@@ -14,6 +14,30 @@ pub fn uniform(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupL
     }
 }
 
+/// A read-only storage buffer at `binding`.
+pub fn storage(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: true },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// A filterable `texture_2d_array` at `binding`, read in the fragment stage (image atlases).
+pub fn atlas(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    texture(
+        binding,
+        wgpu::ShaderStages::FRAGMENT,
+        wgpu::TextureSampleType::Float { filterable: true },
+        wgpu::TextureViewDimension::D2Array,
+    )
+}
+
 /// A non-multisampled texture at `binding`.
 pub fn texture(
     binding: u32,

@@ -735,7 +735,6 @@ fn levels_differ_less_at_the_switch_than_either_differs_from_the_reference() {
         levels: 3,
         view_level: 1,
         light_level: 1,
-
         shadow_resolution: 128,
         band: 0.0,
         ..Default::default()
@@ -744,18 +743,21 @@ fn levels_differ_less_at_the_switch_than_either_differs_from_the_reference() {
     // The bound: switching levels changes the picture less than either level already differs
     // from the reference, so the switch adds no error of its own beyond what each level has.
     // Tree → main branches (meshes kept out: levels 2).
-    let (switch, e1, e2) = at_the_switch(
-        &gpu,
-        "tree-branches",
-        baked.tree_texel(),
-        p.open_texel_pixels,
-        |p, px| HbtParams {
-            levels: 2,
-            open_texel_pixels: px,
-            ..p.clone()
-        },
-        &p,
-    );
+    let tree_to_branches = |what: &str, p: &HbtParams| {
+        at_the_switch(
+            &gpu,
+            what,
+            baked.tree_texel(),
+            p.open_texel_pixels,
+            |p, px| HbtParams {
+                levels: 2,
+                open_texel_pixels: px,
+                ..p.clone()
+            },
+            p,
+        )
+    };
+    let (switch, e1, e2) = tree_to_branches("tree-branches", &p);
     assert!(
         switch < e1.max(e2),
         "tree → branches changes the tree by {switch:.4}, more than the levels' own errors {e1:.4} / {e2:.4}"
@@ -766,18 +768,7 @@ fn levels_differ_less_at_the_switch_than_either_differs_from_the_reference() {
         tree_from_branches: true,
         ..p.clone()
     };
-    let (switch_c, e1c, e2c) = at_the_switch(
-        &gpu,
-        "tree-branches-composed",
-        baked.tree_texel(),
-        p.open_texel_pixels,
-        |p, px| HbtParams {
-            levels: 2,
-            open_texel_pixels: px,
-            ..p.clone()
-        },
-        &composed,
-    );
+    let (switch_c, e1c, e2c) = tree_to_branches("tree-branches-composed", &composed);
     assert!(
         switch_c < e1c.max(e2c),
         "tree (from branches) → branches changes the tree by {switch_c:.4}, more than the levels' own errors {e1c:.4} / {e2c:.4}"

@@ -8,8 +8,8 @@ use crate::bake::codec::DecodeError;
 use crate::bake::views::PlaneLayout;
 use crate::frame::{CASCADES, FrameResources};
 use crate::instances::GpuTreeInstance;
-use crate::pipeline::{self, PassKind, PipelineSpec};
-use crate::technique::common::{Growable, TileAtlas};
+use crate::pipeline;
+use crate::technique::common::{self, Growable, TileAtlas};
 use crate::technique::geometry::{LEAF_TRANSLUCENCY, MeshPipelines, SpeciesMeshes};
 use crate::technique::{DrawContext, DrawCounts, FrameInput, Representation};
 use bytemuck::{Pod, Zeroable};
@@ -300,38 +300,14 @@ impl Representation for BoxTree {
             contents: bytemuck::bytes_of(&atlas),
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("boxtree_sampler"),
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            mipmap_filter: wgpu::MipmapFilterMode::Linear,
-            // No anisotropy (see the geometry technique: ~1000× slower on lavapipe).
-            ..Default::default()
-        });
+        let sampler = common::trilinear_sampler(gpu, "boxtree_sampler");
         let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
-        let tex_entry = |b| {
-            layout::texture(
-                b,
-                wgpu::ShaderStages::FRAGMENT,
-                wgpu::TextureSampleType::Float { filterable: true },
-                wgpu::TextureViewDimension::D2Array,
-            )
-        };
         let bind_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("boxtree_layout"),
             entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: vf,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: true },
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
-                tex_entry(1),
-                tex_entry(2),
+                layout::storage(0, vf),
+                layout::atlas(1),
+                layout::atlas(2),
                 layout::sampler(
                     3,
                     wgpu::ShaderStages::FRAGMENT,
@@ -341,75 +317,30 @@ impl Representation for BoxTree {
             ],
         });
         let (cv, nv) = (color.view(), normal.view());
-        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("boxtree_bind"),
-            layout: &bind_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: box_buffer.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(&cv),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: wgpu::BindingResource::TextureView(&nv),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: wgpu::BindingResource::Sampler(&sampler),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 4,
-                    resource: atlas_buffer.as_entire_binding(),
-                },
+        let bind = common::bind_group(
+            gpu,
+            "boxtree_bind",
+            &bind_layout,
+            &[
+                box_buffer.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&cv),
+                wgpu::BindingResource::TextureView(&nv),
+                wgpu::BindingResource::Sampler(&sampler),
+                atlas_buffer.as_entire_binding(),
             ],
-        });
+        );
         let module = sylvan_gpu::shader(
             gpu,
             "boxtree",
             &pipeline::with_frame(include_str!("boxtree.wgsl")),
         );
-        let buffers = [None, Some(GpuImpostor::LAYOUT)];
-        let premultiplied = wgpu::BlendState {
-            color: wgpu::BlendComponent {
-                src_factor: wgpu::BlendFactor::One,
-                dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
-                operation: wgpu::BlendOperation::Add,
-            },
-            alpha: wgpu::BlendComponent::OVER,
-        };
-        let impostor = pipeline::build(
+        let (impostor, impostor_shadow) = common::image_pipelines(
             gpu,
-            &PipelineSpec {
-                label: "boxtree_impostor",
-                layouts: &[&frame.main_layout, &bind_layout],
-                module: &module,
-                vs: "vs_impostor",
-                fs: Some("fs_impostor"),
-                buffers: &buffers,
-                pass: PassKind::Main,
-                cull: None,
-                depth_write: false,
-                blend: Some(premultiplied),
-            },
-        );
-        let impostor_shadow = pipeline::build(
-            gpu,
-            &PipelineSpec {
-                label: "boxtree_impostor_shadow",
-                layouts: &[&frame.shadow_layout, &bind_layout],
-                module: &module,
-                vs: "vs_impostor_shadow",
-                fs: Some("fs_impostor_shadow"),
-                buffers: &buffers,
-                pass: PassKind::Shadow,
-                cull: None,
-                depth_write: true,
-                blend: None,
-            },
+            frame,
+            &module,
+            "impostor",
+            &[None, Some(GpuImpostor::LAYOUT)],
+            &bind_layout,
         );
         let total_boxes = gpu_boxes.len();
         let preview = preview(baked, images as usize);

@@ -257,17 +257,7 @@ impl MeshPipelines {
                 layout::uniform(2, wgpu::ShaderStages::VERTEX_FRAGMENT),
             ],
         });
-        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("leaf_sampler"),
-            address_mode_u: wgpu::AddressMode::ClampToEdge,
-            address_mode_v: wgpu::AddressMode::ClampToEdge,
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            mipmap_filter: wgpu::MipmapFilterMode::Linear,
-            // No anisotropy: on lavapipe/llvmpipe an anisotropic sampler made the alpha-tested
-            // shadow pass ~1000× slower (measured: 150 s vs 0.1 s for two trees).
-            ..Default::default()
-        });
+        let sampler = crate::technique::common::trilinear_sampler(gpu, "leaf_sampler");
         let module = sylvan_gpu::shader(
             gpu,
             "geometry",

@@ -10,8 +10,8 @@ use crate::bake::codec::DecodeError;
 use crate::directions::{DirectionLut, DirectionSet};
 use crate::frame::{CASCADES, FrameResources};
 use crate::instances::{GpuTreeInstance, Instances};
-use crate::pipeline::{self, PassKind, PipelineSpec};
-use crate::technique::common::{Growable, TileAtlas};
+use crate::pipeline;
+use crate::technique::common::{self, Growable, TileAtlas};
 use crate::technique::geometry::{MeshPipelines, SpeciesMeshes};
 use crate::technique::{DrawContext, DrawCounts, FrameInput, Representation};
 use bytemuck::{Pod, Zeroable};
@@ -509,36 +509,14 @@ impl Representation for Hbt {
             contents: bytemuck::bytes_of(&uniform),
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("hbt_sampler"),
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            mipmap_filter: wgpu::MipmapFilterMode::Linear,
-            // No anisotropy (see the geometry technique: ~1000× slower on lavapipe).
-            ..Default::default()
-        });
+        let sampler = common::trilinear_sampler(gpu, "hbt_sampler");
         let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
-        let storage_entry = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: vf,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: true },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
         let bind_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("hbt_layout"),
             entries: &[
-                storage_entry(0),
-                storage_entry(1),
-                layout::texture(
-                    2,
-                    wgpu::ShaderStages::FRAGMENT,
-                    wgpu::TextureSampleType::Float { filterable: true },
-                    wgpu::TextureViewDimension::D2Array,
-                ),
+                layout::storage(0, vf),
+                layout::storage(1, vf),
+                layout::atlas(2),
                 layout::sampler(
                     3,
                     wgpu::ShaderStages::FRAGMENT,
@@ -548,72 +526,27 @@ impl Representation for Hbt {
             ],
         });
         let atlas_view = atlas.view();
-        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("hbt_bind"),
-            layout: &bind_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: species_buffer.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: frame_buffer.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: wgpu::BindingResource::TextureView(&atlas_view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: wgpu::BindingResource::Sampler(&sampler),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 4,
-                    resource: atlas_buffer.as_entire_binding(),
-                },
+        let bind = common::bind_group(
+            gpu,
+            "hbt_bind",
+            &bind_layout,
+            &[
+                species_buffer.as_entire_binding(),
+                frame_buffer.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&atlas_view),
+                wgpu::BindingResource::Sampler(&sampler),
+                atlas_buffer.as_entire_binding(),
             ],
-        });
+        );
         let module =
             sylvan_gpu::shader(gpu, "hbt", &pipeline::with_frame(include_str!("hbt.wgsl")));
-        let buffers = [None, Some(GpuHbtInstance::LAYOUT)];
-        let premultiplied = wgpu::BlendState {
-            color: wgpu::BlendComponent {
-                src_factor: wgpu::BlendFactor::One,
-                dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
-                operation: wgpu::BlendOperation::Add,
-            },
-            alpha: wgpu::BlendComponent::OVER,
-        };
-        let main = pipeline::build(
+        let (main, shadow) = common::image_pipelines(
             gpu,
-            &PipelineSpec {
-                label: "hbt",
-                layouts: &[&frame.main_layout, &bind_layout],
-                module: &module,
-                vs: "vs_hbt",
-                fs: Some("fs_hbt"),
-                buffers: &buffers,
-                pass: PassKind::Main,
-                cull: None,
-                depth_write: false,
-                blend: Some(premultiplied),
-            },
-        );
-        let shadow = pipeline::build(
-            gpu,
-            &PipelineSpec {
-                label: "hbt_shadow",
-                layouts: &[&frame.shadow_layout, &bind_layout],
-                module: &module,
-                vs: "vs_hbt_shadow",
-                fs: Some("fs_hbt_shadow"),
-                buffers: &buffers,
-                pass: PassKind::Shadow,
-                cull: None,
-                depth_write: true,
-                blend: None,
-            },
+            frame,
+            &module,
+            "hbt",
+            &[None, Some(GpuHbtInstance::LAYOUT)],
+            &bind_layout,
         );
         let static_bytes = atlas.bytes
             + species_buffer.size()
