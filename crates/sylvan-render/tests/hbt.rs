@@ -777,7 +777,9 @@ fn levels_differ_less_at_the_switch_than_either_differs_from_the_reference() {
         switch_c < switch,
         "a tree level rendered from the branches must switch to them more smoothly ({switch_c:.4}) than one baked from geometry ({switch:.4})"
     );
-    // Main branches → the plant's meshes.
+    // Main branches → the plant's meshes (the tree opened into its branches whatever the
+    // distance: with the default thresholds the pine is still closed there and goes from its
+    // tree level straight to its meshes).
     let (switch, e2, e3) = at_the_switch(
         &gpu,
         "branches-meshes",
@@ -785,13 +787,14 @@ fn levels_differ_less_at_the_switch_than_either_differs_from_the_reference() {
         p.mesh_texel_pixels,
         |p, px| HbtParams {
             mesh_texel_pixels: px,
+            open_texel_pixels: 0.1,
             ..p.clone()
         },
         &p,
     );
     // A weaker bound here: the meshes at 1 spp are aliased where the BTFs are prefiltered, so
     // the two err on opposite sides of the reference and differ from each other by more than
-    // either does from it (measured: 0.175 vs 0.139 / 0.114). The switch must still add no
+    // either does from it (measured: 0.154 vs 0.149 / 0.142). The switch must still add no
     // difference beyond the two errors together (what a metric's triangle inequality allows).
     assert!(
         switch < e2 + e3,

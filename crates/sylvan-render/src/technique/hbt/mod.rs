@@ -52,12 +52,13 @@
 //!   drawn with the representative of their size group, scaled (16 by default: with 6, a pine
 //!   70 px tall drawn from its branches was visibly wrong, ꟻLIP 0.059 against 0.049).
 //! - **Two BTF levels, then meshes** (MNP01 §7 has three BTF levels: small branches too). The
-//!   meshes open early — when the main branches' texels would cover 0.5 px, before they are
-//!   magnified: measured on the default view at 1280×720, magnified branch BTFs are both slower
-//!   (overlapping billboards, 12 fetches per fragment) and further from the reference than the
-//!   meshes (ꟻLIP 0.094 with the BTF levels only, 0.049 with meshes; BENCHMARKS.md). With the
-//!   pine the branch level is then drawn over a narrow range of distances only. A tree opens
-//!   into its meshes as a whole, not branch by branch.
+//!   meshes open early — when the main branches' texels would cover 0.35 px, well before they
+//!   are magnified: measured on the default view at 1280×720, magnified branch BTFs are both
+//!   slower (overlapping billboards, 12 fetches per fragment) and further from the reference
+//!   than the meshes (ꟻLIP 0.094 with the BTF levels only, 0.044 with meshes; BENCHMARKS.md).
+//!   With the pine the branch level is then drawn only within the cross-fades (the prunus,
+//!   whose branches are smaller against the tree, keeps a band of its own). A tree opens into
+//!   its meshes as a whole, not branch by branch.
 //! - **By default each level is baked from geometry.** MNP01 §6.1 renders a higher level from
 //!   the lower level's BTFs with the runtime algorithm so that levels shade alike:
 //!   [`HbtParams::tree_from_branches`] does that for the tree level (`compose.rs`, on the CPU).
@@ -228,9 +229,11 @@ impl Default for HbtParams {
             max_branch_objects: 16,
             cube_resolution: 8,
             open_texel_pixels: 2.0,
-            // 0.5: ꟻLIP 0.050 at 1280×720; 1.0: 0.076 and slower (more branch billboards);
-            // 0.35: 0.044, and the branch level no longer drawn at all for the pine.
-            mesh_texel_pixels: 0.5,
+            // Measured on the default view at 1280×720, same speed: 0.35 ꟻLIP 0.044, 0.5 0.049,
+            // 1.0 0.075 and slower (more branch billboards); one pine 60 px tall, back-lit, is
+            // closer than boxtree only at 0.35. The pine's branch level is then drawn only
+            // within its cross-fades (BENCHMARKS.md).
+            mesh_texel_pixels: 0.35,
             band: 0.3,
             tree_from_branches: false,
             // Measured: MNP01's 8-corner interpolation under-darkens a tree in another's shadow
