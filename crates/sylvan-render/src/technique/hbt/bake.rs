@@ -1053,7 +1053,8 @@ pub fn bake(
             p.tile,
             p.supersample.min(2),
             p.min_weight,
-        );
+        )
+        .map_err(option)?;
         progress(total, total);
     }
     Ok(HbtBaked {

@@ -10,13 +10,14 @@
 //! ambient images, then box-filtered to the tile and mip-mapped like a geometry bake.
 //!
 //! This runs on the CPU (the runtime's WGSL, restated): the bake needs the sun-only and
-//! ambient-only terms separately, which the runtime shader never outputs.
+//! ambient-only terms separately, which the runtime shader never outputs. The bake composes at
+//! 2× supersampling at most: the images it draws from are already filtered.
 
 use super::bake::{Mips, ObjectBtf, Placement, downsample, reconstruction_weights, view_frame};
 use super::scene::trilinear;
 use super::visibility;
 use crate::bake::views::PlaneFrame;
-use crate::directions::{DirectionLut, DirectionSet};
+use crate::directions::{DirectionError, DirectionLut, DirectionSet};
 use glam::{Affine3A, Mat3A, Vec3};
 
 /// sRGB byte → linear, for decoding the stored images.
@@ -112,7 +113,8 @@ pub(super) struct LevelBelow<'a> {
 
 /// The tree level's `direct[view · lights + light]` and `ambient` (sky-facing images, then
 /// ground-facing) for the box `min..max`, rendered from the level below at `tile · ss` texels
-/// per side and filtered down to `tile`.
+/// per side and filtered down to `tile`. Fails only if the level below's direction tables
+/// cannot be built.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn tree_level(
     below: &LevelBelow<'_>,
@@ -122,12 +124,10 @@ pub(super) fn tree_level(
     tile: u32,
     ss: u32,
     min_weight: f32,
-) -> (Vec<Mips>, Vec<Mips>) {
+) -> Result<(Vec<Mips>, Vec<Mips>), DirectionError> {
     let lin = srgb_table();
-    let bviews = DirectionLut::new(below.branch_views, DirectionLut::DEFAULT_RESOLUTION)
-        .expect("a valid direction set");
-    let blights = DirectionLut::new(below.branch_lights, DirectionLut::DEFAULT_RESOLUTION)
-        .expect("a valid direction set");
+    let bviews = DirectionLut::new(below.branch_views, DirectionLut::DEFAULT_RESOLUTION)?;
+    let blights = DirectionLut::new(below.branch_lights, DirectionLut::DEFAULT_RESOLUTION)?;
     let frames: Vec<Vec<PlaneFrame>> = below
         .objects
         .iter()
@@ -214,7 +214,7 @@ pub(super) fn tree_level(
         ground.push(g);
     }
     sky.extend(ground);
-    (direct, sky)
+    Ok((direct, sky))
 }
 
 struct Ctx<'a> {
@@ -448,7 +448,7 @@ mod tests {
             branch_lights: &lights,
         };
         let (direct, ambient) =
-            tree_level(&below, &views, &lights, (min, max), tile as u32, 1, 0.05);
+            tree_level(&below, &views, &lights, (min, max), tile as u32, 1, 0.05).unwrap();
         assert_eq!(direct.len(), objects[0].direct.len());
         assert_eq!(ambient.len(), objects[0].ambient.len());
         let worst = |a: &[Mips], b: &[Mips]| {
