@@ -628,6 +628,13 @@ impl Representation for Hbt {
                 let records = input.instances.records(pass, s);
                 let ids = input.instances.ids(pass, s);
                 let mesh_start = self.mesh_staging.len() as u32;
+                // Without a level below, the meshes replace the tree level where it would
+                // be magnified (the branches' earlier switch has no meaning for it).
+                let (m_lo, m_hi) = if plant.placements.is_empty() {
+                    (lo_px, hi_px)
+                } else {
+                    (mesh_lo, mesh_hi)
+                };
                 for (rec, &id) in records.iter().zip(ids) {
                     let (c, sn, scale) = (rec.rot[0], rec.rot[1], rec.base_scale[3]);
                     let tree = PlacedTree::from_record(s, rec.base_scale, rec.rot);
@@ -641,7 +648,7 @@ impl Representation for Hbt {
                     // it shows).
                     let mesh = if with_meshes && receives_in(pass, dist, plant.radius * scale) {
                         let px = plant.mesh_texel * scale * input.pixels_per_metre / dist;
-                        smoothstep(mesh_lo, mesh_hi, px)
+                        smoothstep(m_lo, m_hi, px)
                     } else {
                         0.0
                     };

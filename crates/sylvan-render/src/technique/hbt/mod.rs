@@ -189,7 +189,8 @@ pub struct HbtParams {
     /// this many pixels (MNP01 §4: when the billboard would be magnified).
     pub open_texel_pixels: f32,
     /// Draw only (`levels` = 3): a tree is drawn as its meshes when one texel of its largest
-    /// main branch would cover more than this many pixels.
+    /// main branch would cover more than this many pixels (a plant without a level below: when
+    /// its tree texel would cover more than [`HbtParams::open_texel_pixels`]).
     pub mesh_texel_pixels: f32,
     /// Draw only: the cross-fade band around those switches, relative (0 = hard switch).
     pub band: f32,
