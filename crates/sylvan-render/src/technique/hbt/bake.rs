@@ -698,7 +698,18 @@ fn bake_btf(
             .collect()
     });
     progress(2 * nv + nl);
-    let mut direct = Vec::with_capacity(nv * nl);
+    Ok(per_view_images(lit, nl))
+}
+
+/// Per view sample (direct images in light order, sky-facing, ground-facing ambient image) →
+/// the BTF's `direct[view · lights + light]` and `ambient` (sky-facing images, then
+/// ground-facing).
+pub(super) fn per_view_images(
+    lit: Vec<(Vec<Mips>, Mips, Mips)>,
+    lights: usize,
+) -> (Vec<Mips>, Vec<Mips>) {
+    let nv = lit.len();
+    let mut direct = Vec::with_capacity(nv * lights);
     let mut sky = Vec::with_capacity(2 * nv);
     let mut ground = Vec::with_capacity(nv);
     for (d, s, g) in lit {
@@ -707,7 +718,7 @@ fn bake_btf(
         ground.push(g);
     }
     sky.extend(ground);
-    Ok((direct, sky))
+    (direct, sky)
 }
 
 /// The base objects one level below the plant (MNP01 §3.2, §7: the main branches): distinct

@@ -13,7 +13,9 @@
 //! ambient-only terms separately, which the runtime shader never outputs. The bake composes at
 //! 2× supersampling at most: the images it draws from are already filtered.
 
-use super::bake::{Mips, ObjectBtf, Placement, downsample, reconstruction_weights, view_frame};
+use super::bake::{
+    Mips, ObjectBtf, Placement, downsample, per_view_images, reconstruction_weights, view_frame,
+};
 use super::scene::trilinear;
 use super::visibility;
 use crate::bake::views::PlaneFrame;
@@ -205,16 +207,7 @@ pub(super) fn tree_level(
             .flat_map(|h| h.join().expect("composing thread panicked"))
             .collect()
     });
-    let mut direct = Vec::with_capacity(view_dirs.len() * lights.len());
-    let mut sky = Vec::with_capacity(2 * view_dirs.len());
-    let mut ground = Vec::with_capacity(view_dirs.len());
-    for (d, s, g) in lit {
-        direct.extend(d);
-        sky.push(s);
-        ground.push(g);
-    }
-    sky.extend(ground);
-    Ok((direct, sky))
+    Ok(per_view_images(lit, lights.len()))
 }
 
 struct Ctx<'a> {
