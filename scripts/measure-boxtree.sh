@@ -10,13 +10,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT=${1:-out/measure-boxtree}
-mkdir -p "$OUT"
-export SYLVAN_CACHE_DIR="$OUT/cache"
-export XDG_RUNTIME_DIR=${XDG_RUNTIME_DIR:-/tmp/sylvan-xdg}
-mkdir -p -m 0700 "$XDG_RUNTIME_DIR"
-cargo build --release -q -p sylvan
-S=target/release/sylvan
-flip() { $S compare "$1" "$2" --json "${@:3}" | python3 -c 'import json,sys; print("%.4f" % json.load(sys.stdin)["flip_mean"])'; }
+. scripts/common.sh
 field() { python3 -c "import json,sys; d=json.load(sys.stdin); print(d$1)"; }
 
 echo "## Bake time and memory per preset (sylvan bake --no-cache --json)"

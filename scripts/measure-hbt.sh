@@ -17,13 +17,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT=${1:-out/measure-hbt}
 REFS=out/measure-boxtree
-mkdir -p "$OUT" "$REFS"
-export SYLVAN_CACHE_DIR="$OUT/cache"
-export XDG_RUNTIME_DIR=${XDG_RUNTIME_DIR:-/tmp/sylvan-xdg}
-mkdir -p -m 0700 "$XDG_RUNTIME_DIR"
-cargo build --release -q -p sylvan
-S=target/release/sylvan
-flip() { $S compare "$1" "$2" --json "${@:3}" | python3 -c 'import json,sys; print("%.4f" % json.load(sys.stdin)["flip_mean"])'; }
+mkdir -p "$REFS"
+. scripts/common.sh
 mb() { python3 -c "import json,sys; print('%.2f' % (json.load(sys.stdin)['$1']/1e6))"; }
 
 echo "## Bake time and memory per preset (sylvan bake --technique hbt --no-cache --json)"
