@@ -208,10 +208,7 @@ fn render(
         cache: CachePolicy::Off,
         ..Default::default()
     };
-    let plants = vec![isotropic_tree()];
-    let mut r = sylvan_render::Renderer::new(gpu, scene, &plants, &options).expect("renderer");
-    r.render(gpu, &scene.camera, &scene.sun).expect("frame");
-    image::DynamicImage::ImageRgba8(r.read_image(gpu).unwrap()).into_rgb8()
+    common::render_with_options(gpu, scene, &[isotropic_tree()], &options).0
 }
 
 #[test]
@@ -412,10 +409,7 @@ fn hbt_forest_is_as_close_to_the_reference_as_aliased_geometry() {
             cache: CachePolicy::Off,
             ..Default::default()
         };
-        let mut r = sylvan_render::Renderer::new(&gpu, &scene, &plants, &options).unwrap();
-        r.render(&gpu, &scene.camera, &scene.sun).unwrap();
-        let img = image::DynamicImage::ImageRgba8(r.read_image(&gpu).unwrap()).into_rgb8();
-        (img, r)
+        common::render_with_options(&gpu, &scene, &plants, &options)
     };
     let (reference, _) = render(Geometry, 16);
     let (aliased, _) = render(Geometry, 1);
@@ -504,9 +498,7 @@ fn render_with(
         cache: CachePolicy::Off,
         ..Default::default()
     };
-    let mut r = sylvan_render::Renderer::new(gpu, scene, plants, &options).expect("renderer");
-    r.render(gpu, &scene.camera, &scene.sun).expect("frame");
-    image::DynamicImage::ImageRgba8(r.read_image(gpu).unwrap()).into_rgb8()
+    common::render_with_options(gpu, scene, plants, &options).0
 }
 
 #[test]
@@ -686,9 +678,7 @@ fn at_the_switch(
             cache: CachePolicy::Dir(dir.clone()),
             ..Default::default()
         };
-        let mut r = sylvan_render::Renderer::new(gpu, &scene, &plants, &options).expect("renderer");
-        r.render(gpu, &scene.camera, &scene.sun).expect("frame");
-        image::DynamicImage::ImageRgba8(r.read_image(gpu).unwrap()).into_rgb8()
+        common::render_with_options(gpu, &scene, &plants, &options).0
     };
     let reference = render(Geometry, p, 16);
     let closed = render(Hbt, &set(p, pixels * 1.05), 1);

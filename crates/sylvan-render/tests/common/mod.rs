@@ -181,6 +181,20 @@ pub fn render(gpu: &Gpu, scene: &Scene, sun: &Sun, size: u32, spp: u32) -> image
     image::DynamicImage::ImageRgba8(r.read_image(gpu).expect("readback")).into_rgb8()
 }
 
+/// One frame of `scene` (its camera and sun) with `plants` and `options`: the image, and the
+/// renderer for its statistics.
+pub fn render_with_options(
+    gpu: &Gpu,
+    scene: &Scene,
+    plants: &[Plant],
+    options: &RenderOptions,
+) -> (image::RgbImage, Renderer) {
+    let mut r = Renderer::new(gpu, scene, plants, options).expect("renderer");
+    r.render(gpu, &scene.camera, &scene.sun).expect("frame");
+    let img = image::DynamicImage::ImageRgba8(r.read_image(gpu).expect("readback")).into_rgb8();
+    (img, r)
+}
+
 /// Mean luma (0–255) of the pixels in `[x0, x1) × [y0, y1)`.
 pub fn mean_luma(img: &image::RgbImage, x0: u32, y0: u32, x1: u32, y1: u32) -> f32 {
     let mut sum = 0.0;

@@ -109,6 +109,10 @@ struct PlantDraw {
     /// Texel size of the level drawn just above the meshes (the largest main branch's, or the
     /// tree's without a level below), per unit scale: the meshes open when it is magnified.
     mesh_texel: f32,
+    /// The pixels per `mesh_texel` at which the meshes open: `mesh_texel_pixels`, or without a
+    /// level below `open_texel_pixels` (the tree level is replaced where it would be magnified;
+    /// the branches' earlier switch has no meaning for it).
+    mesh_pixels: f32,
     /// The plant's own meshes (MNP01 §4's polygonal bottom level; with `levels` = 3).
     meshes: Option<SpeciesMeshes>,
     placements: Vec<PlacementDraw>,
@@ -465,6 +469,11 @@ impl Representation for Hbt {
                 radius: (max - min).length() * 0.5,
                 texel,
                 mesh_texel,
+                mesh_pixels: if placements.is_empty() {
+                    params.open_texel_pixels
+                } else {
+                    params.mesh_texel_pixels
+                },
                 meshes,
                 placements,
                 source: index,
@@ -619,8 +628,6 @@ impl Representation for Hbt {
         let p = &self.params;
         let open_px = p.open_texel_pixels;
         let (lo_px, hi_px) = (open_px * (1.0 - p.band), open_px * (1.0 + p.band));
-        let mesh_px = p.mesh_texel_pixels;
-        let (mesh_lo, mesh_hi) = (mesh_px * (1.0 - p.band), mesh_px * (1.0 + p.band));
         for pass in 0..PASSES {
             self.sort.clear();
             for (s, &pi) in self.species_plant.iter().enumerate() {
@@ -628,13 +635,10 @@ impl Representation for Hbt {
                 let records = input.instances.records(pass, s);
                 let ids = input.instances.ids(pass, s);
                 let mesh_start = self.mesh_staging.len() as u32;
-                // Without a level below, the meshes replace the tree level where it would
-                // be magnified (the branches' earlier switch has no meaning for it).
-                let (m_lo, m_hi) = if plant.placements.is_empty() {
-                    (lo_px, hi_px)
-                } else {
-                    (mesh_lo, mesh_hi)
-                };
+                let (m_lo, m_hi) = (
+                    plant.mesh_pixels * (1.0 - p.band),
+                    plant.mesh_pixels * (1.0 + p.band),
+                );
                 for (rec, &id) in records.iter().zip(ids) {
                     let (c, sn, scale) = (rec.rot[0], rec.rot[1], rec.base_scale[3]);
                     let tree = PlacedTree::from_record(s, rec.base_scale, rec.rot);
