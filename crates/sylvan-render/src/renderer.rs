@@ -117,6 +117,8 @@ pub struct FrameStats {
     pub trees_opened: u32,
     /// Of those, trees drawn as their meshes (`hbt` level 3), this frame.
     pub trees_meshed: u32,
+    /// Main branches drawn as their small branches (`hbt` with small branches), this frame.
+    pub branches_opened: u32,
 }
 
 struct Targets {
@@ -444,6 +446,7 @@ impl Renderer {
             visibility_ms: h.visibility_ms,
             trees_opened: h.trees_opened,
             trees_meshed: h.trees_meshed,
+            branches_opened: h.branches_opened,
             frame_ms,
             cpu_ms,
             timer: self.timer.kind(),

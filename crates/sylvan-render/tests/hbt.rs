@@ -628,11 +628,13 @@ fn a_tree_in_another_trees_shadow_darkens_as_in_the_reference() {
     );
 }
 
-/// Renders one pine at the distance where `texel` (plant units) covers `pixels` pixels, just
-/// outside the switch (`closed`, `pixels` × 1.05) and just inside it (`opened`, × 0.95), and
-/// returns ꟻLIP (closed vs opened, reference vs closed, reference vs opened) around the tree.
+/// Renders one `plant` (16 m tall) at the distance where `texel` (plant units) covers `pixels`
+/// pixels, just outside the switch (`closed`, `pixels` × 1.05) and just inside it (`opened`,
+/// × 0.95), and returns ꟻLIP (closed vs opened, reference vs closed, reference vs opened)
+/// around the tree.
 fn at_the_switch(
     gpu: &sylvan_gpu::Gpu,
+    plant: &sylvan_plant::Plant,
     what: &str,
     texel: f32,
     pixels: f32,
@@ -640,7 +642,6 @@ fn at_the_switch(
     p: &HbtParams,
 ) -> (f32, f32, f32) {
     use sylvan_render::TechniqueKind::{Geometry, Hbt};
-    let plant = sylvan_plant::preset("pine").unwrap();
     let (size, fov) = (160u32, 40.0f32);
     let ppm = size as f32 / (2.0 * (fov.to_radians() / 2.0).tan());
     let height = 16.0;
@@ -665,7 +666,7 @@ fn at_the_switch(
         camera,
         common::sun(150.0, 40.0),
     );
-    let plants = vec![plant];
+    let plants = vec![plant.clone()];
     // One bake for the three renders.
     let dir = std::env::temp_dir().join(format!("sylvan-hbt-switch-{what}-{}", std::process::id()));
     let render = |kind, q: &HbtParams, spp| {
@@ -737,6 +738,7 @@ fn levels_differ_less_at_the_switch_than_either_differs_from_the_reference() {
     let tree_to_branches = |what: &str, p: &HbtParams| {
         at_the_switch(
             &gpu,
+            &plant,
             what,
             baked.tree_texel(),
             p.open_texel_pixels,
@@ -773,6 +775,7 @@ fn levels_differ_less_at_the_switch_than_either_differs_from_the_reference() {
     // tree level straight to its meshes).
     let (switch, e2, e3) = at_the_switch(
         &gpu,
+        &plant,
         "branches-meshes",
         baked.mesh_texel(),
         p.mesh_texel_pixels,
@@ -790,5 +793,134 @@ fn levels_differ_less_at_the_switch_than_either_differs_from_the_reference() {
     assert!(
         switch < e2 + e3,
         "branches → meshes changes the tree by {switch:.4}, more than the levels' errors {e2:.4} + {e3:.4}"
+    );
+}
+
+/// MNP01 §7's third level on a plant built as MNP01's pine is (main branches made of
+/// instanced boughs): its objects, placements and cube-maps, and the switch from a main branch
+/// to its small branches.
+#[test]
+fn main_branches_open_into_their_small_branches() {
+    let gpu = gpu();
+    let plant = sylvan_plant::load(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../assets/plants/fir.lsys"
+    )))
+    .expect("fir.lsys");
+    let p = HbtParams {
+        small_branches: true,
+        band: 0.0,
+        ..params()
+    };
+    let start = std::time::Instant::now();
+    let b = hbt::bake::bake(&gpu, &plant, &p, |_, _| {}).expect("bake");
+    let s = &b.small;
+    eprintln!(
+        "fir, 3 BTF levels: {} main objects / {} placements, {} small objects / {} placements, {:.0} ms",
+        b.objects.len(),
+        b.placements.len(),
+        s.objects.len(),
+        s.placements.len(),
+        start.elapsed().as_secs_f64() * 1e3
+    );
+    assert_eq!(s.ranges.len(), b.objects.len());
+    assert_eq!(s.cubes.len(), s.placements.len() * 8 * 6 * 8 * 8);
+    let diag =
+        |o: &hbt::bake::ObjectBtf| (Vec3::from(o.bbox_max) - Vec3::from(o.bbox_min)).length();
+    let mut opening = 0;
+    for (k, o) in b.objects.iter().enumerate() {
+        let r = s.range(k);
+        if o.object == hbt::bake::REST_OBJECT {
+            assert!(r.is_empty(), "the plant's rest does not open");
+            continue;
+        }
+        if r.is_empty() {
+            continue;
+        }
+        opening += 1;
+        // Small branches, at most half the main branch, then its rest, last.
+        let placed = &s.placements[r];
+        let last = &s.objects[placed.last().unwrap().object as usize];
+        assert_eq!(last.object, hbt::bake::REST_OBJECT);
+        let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+        for pl in placed {
+            let so = &s.objects[pl.object as usize];
+            let scale = pl.affine().matrix3.x_axis.length();
+            if so.object != hbt::bake::REST_OBJECT {
+                assert!(
+                    diag(so) * scale <= hbt::bake::SMALL_BRANCH_RATIO * diag(o) * 1.1,
+                    "a small branch of {:.2} m in a main branch of {:.2} m",
+                    diag(so) * scale,
+                    diag(o)
+                );
+            }
+            for c in 0..8 {
+                let w = pl.affine().transform_point3(hbt::visibility::corner(
+                    Vec3::from(so.bbox_min),
+                    Vec3::from(so.bbox_max),
+                    c,
+                ));
+                (lo, hi) = (lo.min(w), hi.max(w));
+            }
+        }
+        // Together they rebuild the main branch, in its frame.
+        let (omin, omax) = (Vec3::from(o.bbox_min), Vec3::from(o.bbox_max));
+        let slack = 0.1 * diag(o);
+        assert!(
+            (lo - omin).abs().max_element() < slack && (hi - omax).abs().max_element() < slack,
+            "small branches span {lo}..{hi}, their main branch {omin}..{omax}"
+        );
+    }
+    assert!(
+        opening >= 3,
+        "only {opening} main branches have small branches"
+    );
+    // Each small branch's cube-maps hold the rest of its main branch: some sky is hidden.
+    let dirs = hbt::visibility::directions(8);
+    let per = 6 * 8 * 8;
+    let mean_sky = s
+        .cubes
+        .chunks(per)
+        .map(|c| hbt::visibility::sky_transmittance(c, &dirs))
+        .sum::<f32>()
+        / (s.cubes.len() / per) as f32;
+    assert!(
+        mean_sky > 0.3 && mean_sky < 0.995,
+        "mean sky transmittance {mean_sky}"
+    );
+    assert_eq!(HbtBaked::decode(&b.encode()).unwrap(), b);
+
+    // The switch: the largest opening main branch, just outside and just inside the distance
+    // where its texels would cover `open_texel_pixels` (the tree is long opened there). Bound
+    // as tree → branches: the switch changes the picture less than either level already
+    // differs from the reference.
+    let texel = (0..b.objects.len())
+        .filter(|&k| !s.range(k).is_empty())
+        .map(|k| {
+            let o = &b.objects[k];
+            let scale = b
+                .placements
+                .iter()
+                .filter(|pl| pl.object as usize == k)
+                .map(|pl| pl.affine().matrix3.x_axis.length())
+                .fold(0.0, f32::max);
+            (Vec3::from(o.bbox_max) - Vec3::from(o.bbox_min)).max_element() * scale / b.tile as f32
+        })
+        .fold(0.0, f32::max);
+    let (switch, e1, e2) = at_the_switch(
+        &gpu,
+        &plant,
+        "main-small",
+        texel,
+        p.open_texel_pixels,
+        |p, px| HbtParams {
+            open_texel_pixels: px,
+            ..p.clone()
+        },
+        &p,
+    );
+    assert!(
+        switch < e1.max(e2),
+        "main branches → small branches changes the tree by {switch:.4}, more than the levels' own errors {e1:.4} / {e2:.4}"
     );
 }

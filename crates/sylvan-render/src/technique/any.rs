@@ -240,6 +240,7 @@ impl AnyTechnique {
                 visibility_ms: t.visibility_build_ms(),
                 trees_opened: t.opened(),
                 trees_meshed: t.meshed(),
+                branches_opened: t.branches_opened(),
             },
             Self::Auto(c) => c.techniques.iter().map(AnyTechnique::hierarchy_stats).fold(
                 HierarchyStats::default(),
@@ -248,6 +249,7 @@ impl AnyTechnique {
                     visibility_ms: a.visibility_ms + b.visibility_ms,
                     trees_opened: a.trees_opened + b.trees_opened,
                     trees_meshed: a.trees_meshed + b.trees_meshed,
+                    branches_opened: a.branches_opened + b.branches_opened,
                 },
             ),
             _ => HierarchyStats::default(),
@@ -297,4 +299,6 @@ pub(crate) struct HierarchyStats {
     pub(crate) trees_opened: u32,
     /// Trees drawn as their meshes (fully or in transition), this frame's camera pass.
     pub(crate) trees_meshed: u32,
+    /// Main branches drawn as their small branches (fully or in transition), this frame.
+    pub(crate) branches_opened: u32,
 }

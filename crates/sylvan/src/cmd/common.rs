@@ -110,6 +110,12 @@ pub struct BakeArgs {
     /// hbt: bake the tree level from `geometry` or by rendering its `branches` with the runtime algorithm (MNP01 §6.1).
     #[arg(long, default_value = "geometry")]
     pub hbt_tree_from: String,
+    /// hbt (levels 2 and 3): also bake MNP01's small-branch level below each main branch (branch objects at most half its size) and open main branches into it where their texels would be magnified.
+    #[arg(long)]
+    pub hbt_small_branches: bool,
+    /// hbt: view × light pair weights below this are dropped and the rest renormalised (MNP01 §4.1); 0.45 keeps only the strongest pair.
+    #[arg(long, default_value_t = HbtParams::default().min_weight)]
+    pub hbt_min_weight: f32,
     /// hbt: received sun shadows from `cascades` (measured closer to the reference) or `cubemaps` (MNP01 §3.3's 8-corner interpolation); the sky term always comes from the cube-maps.
     #[arg(long, default_value = "cascades")]
     pub hbt_shadows: String,
@@ -192,6 +198,8 @@ impl BakeArgs {
         let p = HbtParams {
             fixed_light,
             tree_from_branches,
+            small_branches: self.hbt_small_branches,
+            min_weight: self.hbt_min_weight,
             levels: self.hbt_levels,
             view_level: level("hbt-views", self.hbt_views)?,
             light_level: level("hbt-lights", self.hbt_lights)?,

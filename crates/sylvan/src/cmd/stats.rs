@@ -63,6 +63,9 @@ pub struct Report {
     /// `hbt`: of those, trees drawn as their meshes (last frame).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub trees_meshed: Option<u32>,
+    /// `hbt` with small branches: main branches drawn as their small branches (last frame).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub branches_opened: Option<u32>,
     pub adapter: String,
     /// The camera path replayed (`bench --path`), as given.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -137,6 +140,7 @@ impl Report {
                 .then_some(last.trees_opened),
             trees_meshed: (last.visibility_bytes > 0 || last.trees_meshed > 0)
                 .then_some(last.trees_meshed),
+            branches_opened: (last.branches_opened > 0).then_some(last.branches_opened),
             adapter,
             path: None,
             per_frame: None,

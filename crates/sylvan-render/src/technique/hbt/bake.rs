@@ -16,7 +16,7 @@ use sylvan_gpu::Gpu;
 use sylvan_plant::{Instancing, Mesh, Plant};
 
 /// Bumped whenever the payload below or the lighting baked into it changes.
-pub const FORMAT_VERSION: u32 = 3;
+pub const FORMAT_VERSION: u32 = 4;
 /// Largest visibility cube-map face side accepted.
 pub const MAX_CUBE_RESOLUTION: u32 = 64;
 
@@ -71,6 +71,31 @@ impl Placement {
     }
 }
 
+/// MNP01 §7's third BTF level: the small branches of the main branches.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SmallLevel {
+    /// Representative small branches, then each opening main branch's rest (marked
+    /// [`REST_OBJECT`]), over the branch direction sets.
+    pub objects: Vec<ObjectBtf>,
+    /// Per object of [`HbtBaked::objects`]: the range of `placements` it opens into (empty: it
+    /// does not open). Empty when the level was not baked.
+    pub ranges: Vec<[u32; 2]>,
+    /// Object frame → its main branch's frame.
+    pub placements: Vec<Placement>,
+    /// Per placement, per corner, a cube-map of the rest of its main branch (as
+    /// [`HbtBaked::cubes`]).
+    pub cubes: Vec<u8>,
+}
+
+impl SmallLevel {
+    /// The placements main-branch object `object` opens into (none when it does not open).
+    pub fn range(&self, object: usize) -> std::ops::Range<usize> {
+        self.ranges
+            .get(object)
+            .map_or(0..0, |r| r[0] as usize..r[1] as usize)
+    }
+}
+
 /// The baked BTFs of one plant: the top level of MNP01's hierarchy (the whole tree) and,
 /// when baked with two levels, the level below — a few representative main branches and the
 /// rest of the plant, their placements, and each placement's visibility cube-maps.
@@ -106,6 +131,9 @@ pub struct HbtBaked {
     /// (`6 · cube_resolution²` opacities, 255 = opaque) of the rest of the tree seen from it
     /// (MNP01 §3.3 at the branch level).
     pub cubes: Vec<u8>,
+    /// The small-branch level below the main branches (empty unless baked with
+    /// [`super::HbtParams::small_branches`]).
+    pub small: SmallLevel,
 }
 
 impl HbtBaked {
@@ -140,21 +168,38 @@ impl HbtBaked {
     /// level below, the tree's texel.
     pub fn mesh_texel(&self) -> f32 {
         let only_rest = self.objects.len() == 1;
+        let texel = |o: &ObjectBtf, pl: &Placement| {
+            (Vec3::from(o.bbox_max) - Vec3::from(o.bbox_min)).max_element()
+                * pl.affine().matrix3.x_axis.length()
+                / self.tile as f32
+        };
         self.placements
             .iter()
             .filter_map(|pl| {
                 let o = &self.objects[pl.object as usize];
-                (o.object != REST_OBJECT || only_rest).then(|| {
-                    let scale = pl.affine().matrix3.x_axis.length();
-                    (Vec3::from(o.bbox_max) - Vec3::from(o.bbox_min)).max_element() * scale
-                        / self.tile as f32
-                })
+                if o.object == REST_OBJECT && !only_rest {
+                    return None;
+                }
+                // A main branch that opens into small branches: their largest texel (its
+                // rest, as long as it, does not count either).
+                let small = self.small.range(pl.object as usize);
+                if small.is_empty() {
+                    return Some(texel(o, pl));
+                }
+                let scale = pl.affine().matrix3.x_axis.length();
+                self.small.placements[small]
+                    .iter()
+                    .filter_map(|sp| {
+                        let so = &self.small.objects[sp.object as usize];
+                        (so.object != REST_OBJECT).then(|| texel(so, sp) * scale)
+                    })
+                    .reduce(f32::max)
             })
             .reduce(f32::max)
             .unwrap_or_else(|| self.tree_texel())
     }
 
-    /// Bytes of image data (all mips), tree level then the level below.
+    /// Bytes of image data (all mips), tree level then the levels below.
     pub fn image_bytes(&self) -> (u64, u64) {
         let sum = |sets: &mut dyn Iterator<Item = &Mips>| -> u64 {
             sets.flatten().map(|l| l.len() as u64).sum()
@@ -162,6 +207,7 @@ impl HbtBaked {
         let objects = sum(&mut self
             .objects
             .iter()
+            .chain(&self.small.objects)
             .flat_map(|o| o.direct.iter().chain(&o.ambient)));
         (sum(&mut self.direct.iter().chain(&self.ambient)), objects)
     }
@@ -180,19 +226,10 @@ impl HbtBaked {
         e.f32s(&self.bbox_min);
         e.f32s(&self.bbox_max);
         encode_images(&mut e, &self.direct, &self.ambient);
-        e.u64(self.objects.len() as u64);
-        for o in &self.objects {
-            e.u32s(&[o.object, o.uses]);
-            e.f32s(&o.bbox_min);
-            e.f32s(&o.bbox_max);
-            encode_images(&mut e, &o.direct, &o.ambient);
-        }
-        e.u64(self.placements.len() as u64);
-        for p in &self.placements {
-            e.u32(p.object);
-            e.f32s(&p.transform);
-        }
-        e.bytes(&self.cubes);
+        encode_level(&mut e, &self.objects, &self.placements, &self.cubes);
+        let s = &self.small;
+        encode_level(&mut e, &s.objects, &s.placements, &s.cubes);
+        e.u32s(s.ranges.as_flattened());
         e.buf
     }
 
@@ -240,61 +277,36 @@ impl HbtBaked {
             counts[branch_view_level as usize],
             counts[branch_light_level as usize],
         );
-        let nobjects = d.u64()?;
-        // Each object takes at least its header and images; a huge count fails here.
-        if nobjects > d.remaining() as u64 / 64 {
+        let (objects, placements, cubes) =
+            decode_level(&mut d, tile, bviews, blights, cube_resolution)?;
+        let (sobjects, splacements, scubes) =
+            decode_level(&mut d, tile, bviews, blights, cube_resolution)?;
+        let flat = d.u32s()?;
+        if !(flat.is_empty() || flat.len() == 2 * objects.len()) {
             return Err(bad(format!(
-                "{nobjects} objects in {} bytes",
-                d.remaining()
+                "{} small-level range bounds for {} objects",
+                flat.len(),
+                objects.len()
             )));
         }
-        let mut objects = Vec::with_capacity(nobjects as usize);
-        for _ in 0..nobjects {
-            let ids = d.u32s()?;
-            let [object, uses] = ids[..] else {
-                return Err(bad("object header is not 2 integers".into()));
-            };
-            let bbox_min = arr3(d.f32s()?)?;
-            let bbox_max = arr3(d.f32s()?)?;
-            let (direct, ambient) = decode_images(&mut d, tile, bviews, blights)?;
-            objects.push(ObjectBtf {
-                object,
-                uses,
-                bbox_min,
-                bbox_max,
-                direct,
-                ambient,
-            });
-        }
-        let nplacements = d.u64()?;
-        if nplacements > d.remaining() as u64 / 56 {
+        let ranges: Vec<[u32; 2]> = flat.chunks_exact(2).map(|r| [r[0], r[1]]).collect();
+        if let Some(r) = ranges
+            .iter()
+            .find(|r| r[0] > r[1] || r[1] as usize > splacements.len())
+        {
             return Err(bad(format!(
-                "{nplacements} placements in {} bytes",
-                d.remaining()
+                "small-level range {}..{} of {} placements",
+                r[0],
+                r[1],
+                splacements.len()
             )));
         }
-        let mut placements = Vec::with_capacity(nplacements as usize);
-        for i in 0..nplacements {
-            let object = d.u32()?;
-            let transform: [f32; 12] = d
-                .f32s()?
-                .try_into()
-                .map_err(|_| bad(format!("placement {i}: transform is not 12 floats")))?;
-            if object as u64 >= nobjects || transform.iter().any(|x| !x.is_finite()) {
-                return Err(bad(format!("placement {i}: bad object or transform")));
-            }
-            placements.push(Placement { object, transform });
-        }
-        let cubes = d.bytes()?.to_vec();
-        let per =
-            visibility::CORNERS * visibility::FACES * (cube_resolution * cube_resolution) as usize;
-        if cubes.len() != placements.len() * per {
-            return Err(bad(format!(
-                "{} cube-map bytes for {} placements",
-                cubes.len(),
-                placements.len()
-            )));
-        }
+        let small = SmallLevel {
+            objects: sobjects,
+            ranges,
+            placements: splacements,
+            cubes: scubes,
+        };
         d.finish()?;
         Ok(Self {
             tile,
@@ -310,8 +322,100 @@ impl HbtBaked {
             placements,
             cube_resolution,
             cubes,
+            small,
         })
     }
+}
+
+/// Writes one level below the tree: its objects, placements and cube-maps.
+fn encode_level(e: &mut Encoder, objects: &[ObjectBtf], placements: &[Placement], cubes: &[u8]) {
+    e.u64(objects.len() as u64);
+    for o in objects {
+        e.u32s(&[o.object, o.uses]);
+        e.f32s(&o.bbox_min);
+        e.f32s(&o.bbox_max);
+        encode_images(e, &o.direct, &o.ambient);
+    }
+    e.u64(placements.len() as u64);
+    for p in placements {
+        e.u32(p.object);
+        e.f32s(&p.transform);
+    }
+    e.bytes(cubes);
+}
+
+/// A level below the tree as stored: objects, placements, cube-maps.
+type LevelPayload = (Vec<ObjectBtf>, Vec<Placement>, Vec<u8>);
+
+/// One level as [`encode_level`] wrote it, every count and size checked.
+fn decode_level(
+    d: &mut Decoder<'_>,
+    tile: u32,
+    views: usize,
+    lights: usize,
+    cube_resolution: u32,
+) -> Result<LevelPayload, DecodeError> {
+    let bad = |m: String| DecodeError(m);
+    let arr3 = |v: Vec<f32>| -> Result<[f32; 3], DecodeError> {
+        v.try_into()
+            .map_err(|_| DecodeError("bounding box corner is not 3 floats".into()))
+    };
+    let nobjects = d.u64()?;
+    // Each object takes at least its header and images; a huge count fails here.
+    if nobjects > d.remaining() as u64 / 64 {
+        return Err(bad(format!(
+            "{nobjects} objects in {} bytes",
+            d.remaining()
+        )));
+    }
+    let mut objects = Vec::with_capacity(nobjects as usize);
+    for _ in 0..nobjects {
+        let ids = d.u32s()?;
+        let [object, uses] = ids[..] else {
+            return Err(bad("object header is not 2 integers".into()));
+        };
+        let bbox_min = arr3(d.f32s()?)?;
+        let bbox_max = arr3(d.f32s()?)?;
+        let (direct, ambient) = decode_images(d, tile, views, lights)?;
+        objects.push(ObjectBtf {
+            object,
+            uses,
+            bbox_min,
+            bbox_max,
+            direct,
+            ambient,
+        });
+    }
+    let nplacements = d.u64()?;
+    if nplacements > d.remaining() as u64 / 56 {
+        return Err(bad(format!(
+            "{nplacements} placements in {} bytes",
+            d.remaining()
+        )));
+    }
+    let mut placements = Vec::with_capacity(nplacements as usize);
+    for i in 0..nplacements {
+        let object = d.u32()?;
+        let transform: [f32; 12] = d
+            .f32s()?
+            .try_into()
+            .map_err(|_| bad(format!("placement {i}: transform is not 12 floats")))?;
+        if object as u64 >= nobjects || transform.iter().any(|x| !x.is_finite()) {
+            return Err(bad(format!("placement {i}: bad object or transform")));
+        }
+        placements.push(Placement { object, transform });
+    }
+    let cubes = d.bytes()?.to_vec();
+    let per =
+        visibility::CORNERS * visibility::FACES * (cube_resolution * cube_resolution) as usize;
+    if cubes.len() != placements.len() * per {
+        return Err(bad(format!(
+            "{} cube-map bytes for {} placements",
+            cubes.len(),
+            placements.len()
+        )));
+    }
+    Ok((objects, placements, cubes))
 }
 
 /// The cube-map of `placement` at `corner` in a placement-major run of cube-maps of side `res`
@@ -387,6 +491,7 @@ pub fn input_hash(plant: &Plant, p: &HbtParams) -> u64 {
             // Levels 2 and 3 (meshes below the branches) bake the same.
             p.levels.min(2),
             (p.levels >= 2 && p.tree_from_branches) as u32,
+            (p.levels >= 2 && p.small_branches) as u32,
         ])
         .f32s(&[LEAF_TRANSLUCENCY]);
     if p.levels >= 2 {
@@ -744,111 +849,125 @@ pub fn main_branches(plant: &Plant) -> Vec<(u32, u32)> {
 }
 
 /// Base object `object` of `plant` expanded into a plant of its own (its frame, the plant's
-/// leaf texture), ready for the baker. With `rest_only`, the object's own geometry and the
-/// leaves it places directly, without its branches (the plant's rest, for the root).
+/// leaf texture), ready for the baker.
 pub fn object_plant(plant: &Plant, object: u32) -> Plant {
-    expand_object(plant, object, false)
+    split_object(plant, object, &|_| false, "").1
 }
 
-fn expand_object(plant: &Plant, object: u32, rest_only: bool) -> Plant {
-    fn expand(
-        inst: &Instancing,
-        o: u32,
-        m: &Mat4,
-        wood: &mut Mesh,
-        leaves: &mut Mesh,
-        depth: u32,
-        rest: bool,
-    ) {
-        let Some(obj) = inst.objects.get(o as usize) else {
+/// Expands base object `object` of `plant` into a plant of its own, except the non-leaf
+/// instances `stop` selects (anywhere below it): those are returned as (object, transform into
+/// `object`'s frame) and left out. `label` names the remainder (empty: `object N`).
+fn split_object(
+    plant: &Plant,
+    object: u32,
+    stop: &dyn Fn(u32) -> bool,
+    label: &str,
+) -> (Vec<(u32, Mat4)>, Plant) {
+    struct Walk<'a> {
+        inst: &'a Instancing,
+        stop: &'a dyn Fn(u32) -> bool,
+        wood: Mesh,
+        leaves: Mesh,
+        stopped: Vec<(u32, Mat4)>,
+    }
+    fn expand(w: &mut Walk<'_>, o: u32, m: &Mat4, depth: u32) {
+        let Some(obj) = w.inst.objects.get(o as usize) else {
             return;
         };
         if depth > 256 {
             return;
         }
-        wood.append_transformed(&obj.wood, m);
-        leaves.append_transformed(&obj.leaves, m);
+        w.wood.append_transformed(&obj.wood, m);
+        w.leaves.append_transformed(&obj.leaves, m);
         for i in &obj.instances {
-            let leaf = inst
+            let leaf = w
+                .inst
                 .objects
                 .get(i.object as usize)
                 .is_some_and(|c| c.level == 0);
-            if rest && !leaf {
-                continue;
+            let t = *m * i.transform;
+            if !leaf && (w.stop)(i.object) {
+                w.stopped.push((i.object, t));
+            } else {
+                expand(w, i.object, &t, depth + 1);
             }
-            expand(
-                inst,
-                i.object,
-                &(*m * i.transform),
-                wood,
-                leaves,
-                depth + 1,
-                false,
-            );
         }
     }
-    let (mut wood, mut leaves) = (Mesh::default(), Mesh::default());
-    expand(
-        &plant.instancing,
-        object,
-        &Mat4::IDENTITY,
-        &mut wood,
-        &mut leaves,
-        0,
-        rest_only,
-    );
+    let mut w = Walk {
+        inst: &plant.instancing,
+        stop,
+        wood: Mesh::default(),
+        leaves: Mesh::default(),
+        stopped: Vec::new(),
+    };
+    expand(&mut w, object, &Mat4::IDENTITY, 0);
     let (mut min, mut max) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-    for p in wood.positions.iter().chain(&leaves.positions) {
+    for p in w.wood.positions.iter().chain(&w.leaves.positions) {
         min = min.min(Vec3::from(*p));
         max = max.max(Vec3::from(*p));
     }
     if min.x > max.x {
         (min, max) = (Vec3::ZERO, Vec3::ZERO);
     }
-    let what = if rest_only {
-        "rest".to_string()
-    } else {
+    let what = if label.is_empty() {
         format!("object {object}")
+    } else {
+        label.to_string()
     };
-    Plant {
+    let out = Plant {
         name: format!("{} {what}", plant.name),
-        leaf_count: leaves.indices.len() / 6,
-        wood,
-        leaves,
+        leaf_count: w.leaves.indices.len() / 6,
+        wood: w.wood,
+        leaves: w.leaves,
         leaf_texture: plant.leaf_texture.clone(),
         bbox_min: min.to_array(),
         bbox_max: max.to_array(),
         hierarchy: Default::default(),
         instancing: Default::default(),
         internodes: 0,
-    }
+    };
+    (w.stopped, out)
 }
 
-/// The level below the tree as drawn: at most `max_objects` representative main branches plus
-/// the plant's rest, and where each is placed.
-pub struct BranchLevel {
-    /// (instancing object or [`REST_OBJECT`], the object as a plant, placements using it).
-    pub objects: Vec<(u32, Plant, u32)>,
-    /// (index into `objects`, object frame → plant frame).
-    pub placements: Vec<(u32, Mat4)>,
+/// Mean vertex position of a plant's wood and leaves (its frame's origin when empty).
+fn centroid(p: &Plant) -> Vec3 {
+    let all = p.wood.positions.iter().chain(&p.leaves.positions);
+    let n = p.wood.positions.len() + p.leaves.positions.len();
+    all.map(|&v| Vec3::from(v)).sum::<Vec3>() / n.max(1) as f32
 }
 
-/// Chooses the level below the tree (MNP01 §3.2, §7). MNP01's pine is built from a handful of
-/// instanced main branches; an L-system tree has as many distinct main branches as its
-/// parameters vary (26 on the pine, 223 on the prunus), too many to bake a BTF each. So the
-/// distinct main branches are sorted by size and cut into at most `max_objects` groups of equal
-/// placement count; each group is drawn with its most used member, scaled by the ratio of
-/// bounding-box diagonals (about the branch base). The root's own wood and the leaves it places
-/// directly are one more object, the *rest*, placed at the identity.
-pub fn branch_level(plant: &Plant, max_objects: usize) -> BranchLevel {
-    let inst = &plant.instancing;
-    let main = main_branches(plant);
-    let diag = |p: &Plant| (Vec3::from(p.bbox_max) - Vec3::from(p.bbox_min)).length();
-    let mut distinct: Vec<(u32, u32, Plant)> = main
-        .iter()
-        .map(|&(o, uses)| (o, uses, object_plant(plant, o)))
-        .collect();
-    distinct.sort_by(|a, b| diag(&a.2).total_cmp(&diag(&b.2)));
+/// Bounding-box diagonal of a plant (or expanded object).
+fn diagonal(p: &Plant) -> f32 {
+    (Vec3::from(p.bbox_max) - Vec3::from(p.bbox_min)).length()
+}
+
+/// How one object is drawn by its representative: (object, representative index, map from the
+/// representative's frame to the object's).
+type Fit = (u32, usize, Mat4);
+
+/// What an object of the level above is split into: the objects cut off below it (with
+/// transforms into its frame), its rest, and how many times it is placed.
+struct Parent {
+    children: Vec<(u32, Mat4)>,
+    rest: Plant,
+    uses: u32,
+}
+
+/// Representatives of many distinct objects (MNP01 builds each level from a few instanced
+/// base objects; an L-system tree has as many distinct ones as its parameters vary): the
+/// `distinct` (object, placements, object as a plant) are sorted by size and cut into at most
+/// `max_objects` groups of equal placement count; each group is drawn with its most used
+/// member (largest on ties), scaled by the ratio of bounding-box diagonals about the object's
+/// base and turned about it so that its centroid points where the member's does (objects of one
+/// group often differ only by the turn at their bracket: a bough left or right of its branch, a
+/// main branch pitched more or less). Returns the representatives (object, plant) and, per
+/// object id of `distinct`, its representative's index and the map from the representative's
+/// frame to the member's.
+fn representatives(
+    mut distinct: Vec<(u32, u32, Plant)>,
+    max_objects: usize,
+) -> (Vec<(u32, Plant)>, Vec<Fit>) {
+    distinct.sort_by(|a, b| diagonal(&a.2).total_cmp(&diagonal(&b.2)));
     let total: u32 = distinct.iter().map(|d| d.1).sum();
     let groups = max_objects.max(1).min(distinct.len().max(1));
     // group[i]: the group of distinct[i] (equal shares of the placements, in size order).
@@ -859,42 +978,183 @@ pub fn branch_level(plant: &Plant, max_objects: usize) -> BranchLevel {
         group.push(g.min(groups - 1));
         seen += d.1;
     }
-    let mut objects: Vec<(u32, Plant, u32)> = Vec::new();
-    // Representative of each group: its most used member (largest on ties).
+    let mut reps: Vec<(u32, Plant)> = Vec::new();
     let mut rep_of_group = vec![usize::MAX; groups];
     for (g, rep) in rep_of_group.iter_mut().enumerate() {
         let best = (0..distinct.len())
             .filter(|&i| group[i] == g)
             .max_by_key(|&i| (distinct[i].1, i));
         if let Some(i) = best {
-            *rep = objects.len();
-            objects.push((distinct[i].0, distinct[i].2.clone(), 0));
+            *rep = reps.len();
+            reps.push((distinct[i].0, distinct[i].2.clone()));
         }
     }
-    let mut placements = Vec::new();
-    if let Some(root) = inst.objects.get(inst.root as usize) {
-        for i in &root.instances {
-            let Some(k) = distinct.iter().position(|d| d.0 == i.object) else {
-                continue;
-            };
-            let r = rep_of_group[group[k]];
-            if r == usize::MAX {
-                continue;
+    let centroids: Vec<Vec3> = reps.iter().map(|r| centroid(&r.1)).collect();
+    let of = distinct
+        .iter()
+        .zip(&group)
+        .filter_map(|(d, &g)| {
+            let r = rep_of_group[g];
+            (r != usize::MAX).then(|| {
+                let scale = diagonal(&d.2) / diagonal(&reps[r].1).max(1e-6);
+                let (from, to) = (centroids[r], centroid(&d.2));
+                let turn = if from.length() > 1e-4 && to.length() > 1e-4 {
+                    glam::Quat::from_rotation_arc(from.normalize(), to.normalize())
+                } else {
+                    glam::Quat::IDENTITY
+                };
+                (
+                    d.0,
+                    r,
+                    Mat4::from_scale_rotation_translation(Vec3::splat(scale), turn, Vec3::ZERO),
+                )
+            })
+        })
+        .collect();
+    (reps, of)
+}
+
+/// The level below the tree as drawn: at most `max_objects` representative main branches plus
+/// the plant's rest, and where each is placed.
+pub struct BranchLevel {
+    /// (instancing object or [`REST_OBJECT`], the object as a plant, placements using it).
+    pub objects: Vec<(u32, Plant, u32)>,
+    /// (index into `objects`, object frame → parent frame).
+    pub placements: Vec<(u32, Mat4)>,
+    /// Per object of the level above (the small-branch level only; empty for the main
+    /// branches): the range of `placements` it opens into (empty when it does not open).
+    pub ranges: Vec<[u32; 2]>,
+}
+
+/// Chooses the level below the tree (MNP01 §3.2, §7): the distinct objects the root instances
+/// directly (leaves excluded) — the main branches — as at most `max_objects` representatives
+/// ([`representatives`]), and the root's own wood with the leaves it places directly, one
+/// more object, the *rest*, placed at the identity.
+pub fn branch_level(plant: &Plant, max_objects: usize) -> BranchLevel {
+    // Every branch instance of the root is cut off (deeper ones belong to them); the rest is
+    // kept even alone (an imported mesh has nothing else).
+    let (children, rest) = split_object(plant, plant.instancing.root, &|_| true, "rest");
+    let mut level = from_children(
+        plant,
+        &[Parent {
+            children,
+            rest,
+            uses: 1,
+        }],
+        max_objects,
+        true,
+    );
+    level.ranges.clear();
+    level
+}
+
+/// The common end of both levels: `parents` are, per object of the level above, the objects
+/// it places (with transforms), its rest and how many times it is placed; the children are
+/// grouped into representatives and each parent's placements follow, then its rest (only when
+/// it has children, unless `lonely_rest`).
+fn from_children(
+    plant: &Plant,
+    parents: &[Parent],
+    max_objects: usize,
+    lonely_rest: bool,
+) -> BranchLevel {
+    let mut distinct: Vec<(u32, u32, Plant)> = Vec::new();
+    for Parent { children, uses, .. } in parents {
+        for &(o, _) in children {
+            match distinct.iter_mut().find(|d| d.0 == o) {
+                Some(d) => d.1 += uses,
+                None => distinct.push((o, *uses, object_plant(plant, o))),
             }
-            let s = diag(&distinct[k].2) / diag(&objects[r].1).max(1e-6);
-            objects[r].2 += 1;
-            placements.push((r as u32, i.transform * Mat4::from_scale(Vec3::splat(s))));
         }
     }
-    let rest = expand_object(plant, inst.root, true);
-    if !rest.wood.indices.is_empty() || !rest.leaves.indices.is_empty() {
-        placements.push((objects.len() as u32, Mat4::IDENTITY));
-        objects.push((REST_OBJECT, rest, 1));
+    let (reps, of) = representatives(distinct, max_objects);
+    let mut objects: Vec<(u32, Plant, u32)> = reps.into_iter().map(|(o, p)| (o, p, 0)).collect();
+    let mut placements = Vec::new();
+    let mut ranges = Vec::with_capacity(parents.len());
+    for Parent {
+        children,
+        rest,
+        uses,
+    } in parents
+    {
+        let start = placements.len() as u32;
+        if lonely_rest || !children.is_empty() {
+            for (o, t) in children {
+                let Some(&(_, r, fit)) = of.iter().find(|x| x.0 == *o) else {
+                    continue;
+                };
+                objects[r].2 += uses;
+                placements.push((r as u32, *t * fit));
+            }
+            if !rest.wood.indices.is_empty() || !rest.leaves.indices.is_empty() {
+                placements.push((objects.len() as u32, Mat4::IDENTITY));
+                objects.push((REST_OBJECT, rest.clone(), *uses));
+            }
+        }
+        ranges.push([start, placements.len() as u32]);
     }
     BranchLevel {
         objects,
         placements,
+        ranges,
     }
+}
+
+/// How much smaller than its main branch a small branch is: the small branches of a main
+/// branch are the largest branch objects below it whose bounding-box diagonal is at most this
+/// fraction of the main branch's (MNP01 §7: small branches grouped into main branches).
+pub const SMALL_BRANCH_RATIO: f32 = 0.5;
+
+/// MNP01 §7's third level: the small branches of each main-branch object of `main` (at most
+/// `max_objects` representatives over the whole plant, [`representatives`]) placed in its
+/// frame, then its rest (its own wood and the leaves and branch parts above the cut). A main
+/// branch without small branches does not open (an empty range); nor does the plant's rest.
+pub fn small_level(plant: &Plant, main: &BranchLevel, max_objects: usize) -> BranchLevel {
+    let inst = &plant.instancing;
+    let parents: Vec<Parent> = main
+        .objects
+        .iter()
+        .map(|(o, p, uses)| {
+            if *o == REST_OBJECT {
+                return Parent {
+                    children: Vec::new(),
+                    rest: Plant::default(),
+                    uses: 0,
+                };
+            }
+            let cut = SMALL_BRANCH_RATIO * diagonal(p);
+            // The size of every branch object below it, once.
+            let mut sizes: Vec<(u32, f32)> = Vec::new();
+            let mut stack = vec![*o];
+            while let Some(x) = stack.pop() {
+                for i in inst
+                    .objects
+                    .get(x as usize)
+                    .map_or(&[][..], |b| &b.instances)
+                {
+                    let leaf = inst
+                        .objects
+                        .get(i.object as usize)
+                        .is_none_or(|c| c.level == 0);
+                    if !leaf && i.object != *o && !sizes.iter().any(|s| s.0 == i.object) {
+                        sizes.push((i.object, diagonal(&object_plant(plant, i.object))));
+                        stack.push(i.object);
+                    }
+                    if sizes.len() > 4096 {
+                        break;
+                    }
+                }
+            }
+            let stop = |c: u32| sizes.iter().any(|s| s.0 == c && s.1 <= cut);
+            let (children, rest) = split_object(plant, *o, &stop, &format!("object {o} rest"));
+            Parent {
+                children,
+                rest,
+                uses: *uses,
+            }
+        })
+        .collect();
+    from_children(plant, &parents, max_objects, false)
 }
 
 /// The coverage of an object's BTF for the visibility cube-maps: the alpha of its sky-facing
@@ -1000,11 +1260,21 @@ pub fn bake(
         BranchLevel {
             objects: Vec::new(),
             placements: Vec::new(),
+            ranges: Vec::new(),
+        }
+    };
+    let small = if p.levels >= 2 && p.small_branches {
+        small_level(plant, &level, p.max_branch_objects as usize)
+    } else {
+        BranchLevel {
+            objects: Vec::new(),
+            placements: Vec::new(),
+            ranges: Vec::new(),
         }
     };
     let top = 2 * views.len() + lights.len();
     let per_object = 2 * bviews.len() + blights.len();
-    let total = top + per_object * level.objects.len();
+    let total = top + per_object * (level.objects.len() + small.objects.len());
     // MNP01 §6.1: with `tree_from_branches` the tree level is rendered from the level below
     // once that is baked (below); otherwise from geometry, now.
     let compose = p.levels >= 2 && p.tree_from_branches && !level.placements.is_empty();
@@ -1013,8 +1283,8 @@ pub fn bake(
     } else {
         bake_btf(gpu, plant, p, &views, &lights, &mut |d| progress(d, total))?
     };
-    let mut objects = Vec::with_capacity(level.objects.len());
-    for (k, (object, sub, uses)) in level.objects.iter().enumerate() {
+    let mut objects = Vec::with_capacity(level.objects.len() + small.objects.len());
+    for (k, (object, sub, uses)) in level.objects.iter().chain(&small.objects).enumerate() {
         let done = top + per_object * k;
         let (direct, ambient) = bake_btf(gpu, sub, p, &bviews, &blights, &mut |d| {
             progress(done + d, total)
@@ -1028,26 +1298,28 @@ pub fn bake(
             ambient,
         });
     }
-    let placements: Vec<Placement> = level
-        .placements
-        .iter()
-        .map(|(o, m)| Placement {
-            object: *o,
-            transform: Affine3A::from_mat4(*m).to_cols_array(),
-        })
-        .collect();
-    let cubes = if placements.is_empty() {
-        Vec::new()
-    } else {
-        let lut = DirectionLut::new(&bviews, DirectionLut::DEFAULT_RESOLUTION).map_err(option)?;
-        branch_cubes(
-            &objects,
-            &placements,
-            &lut,
-            p.tile,
-            p.cube_resolution as usize,
-        )
+    let small_objects = objects.split_off(level.objects.len());
+    let placed = |level: &BranchLevel| -> Vec<Placement> {
+        level
+            .placements
+            .iter()
+            .map(|(o, m)| Placement {
+                object: *o,
+                transform: Affine3A::from_mat4(*m).to_cols_array(),
+            })
+            .collect()
     };
+    let placements = placed(&level);
+    let small_placements = placed(&small);
+    let lut = DirectionLut::new(&bviews, DirectionLut::DEFAULT_RESOLUTION).map_err(option)?;
+    let res = p.cube_resolution as usize;
+    let cubes = branch_cubes(&objects, &placements, &lut, p.tile, res);
+    // MNP01 §3.3 one level down: each small branch sees the rest of its own main branch.
+    let mut small_cubes = Vec::new();
+    for r in &small.ranges {
+        let within = &small_placements[r[0] as usize..r[1] as usize];
+        small_cubes.extend(branch_cubes(&small_objects, within, &lut, p.tile, res));
+    }
     if compose {
         (direct, ambient) = super::compose::tree_level(
             &super::compose::LevelBelow {
@@ -1082,6 +1354,12 @@ pub fn bake(
         placements,
         cube_resolution: p.cube_resolution,
         cubes,
+        small: SmallLevel {
+            objects: small_objects,
+            ranges: small.ranges,
+            placements: small_placements,
+            cubes: small_cubes,
+        },
     })
 }
 
@@ -1144,7 +1422,51 @@ mod tests {
             }],
             cube_resolution: 2,
             cubes: vec![7; 8 * 6 * 4],
+            small: SmallLevel::default(),
         };
+        let object = |o: u32| ObjectBtf {
+            object: o,
+            uses: 1,
+            bbox_min: [0.0; 3],
+            bbox_max: [0.5; 3],
+            direct: vec![mips(8); 36],
+            ambient: vec![mips(8); 12],
+        };
+        let placed = |o: u32| Placement {
+            object: o,
+            transform: Affine3A::IDENTITY.to_cols_array(),
+        };
+        let with_small = HbtBaked {
+            small: SmallLevel {
+                objects: vec![object(5), object(REST_OBJECT)],
+                ranges: vec![[0, 2]],
+                placements: vec![placed(0), placed(1)],
+                cubes: vec![9; 2 * 8 * 6 * 4],
+            },
+            ..b.clone()
+        };
+        let bytes = with_small.encode();
+        assert_eq!(HbtBaked::decode(&bytes).unwrap(), with_small);
+        for broken in [
+            SmallLevel {
+                ranges: vec![[0, 3]],
+                ..with_small.small.clone()
+            },
+            SmallLevel {
+                ranges: vec![[0, 2], [2, 2]],
+                ..with_small.small.clone()
+            },
+            SmallLevel {
+                cubes: vec![9; 8 * 6 * 4],
+                ..with_small.small.clone()
+            },
+        ] {
+            let wrong = HbtBaked {
+                small: broken,
+                ..b.clone()
+            };
+            assert!(HbtBaked::decode(&wrong.encode()).is_err());
+        }
         let bytes = b.encode();
         assert_eq!(HbtBaked::decode(&bytes).unwrap(), b);
         assert!(HbtBaked::decode(&bytes[..bytes.len() - 1]).is_err());

@@ -58,7 +58,8 @@ struct GpuHbtInstance {
     m: [[f32; 4]; 3],
     /// The 3 view samples; w: image set.
     views: [u32; 4],
-    /// The 3 light samples.
+    /// The 3 light samples; w: hierarchy level (0 tree, 1 main branch, 2 small branch), for
+    /// the technique debug view.
     lights: [u32; 4],
     /// Pair weights `w[3·view + light]`; the last 3 unused.
     weights: [f32; 12],
@@ -96,6 +97,28 @@ struct PlacementDraw {
     sky: [f32; 8],
     /// Index of the placement in its plant's baked cube-maps.
     index: usize,
+    /// Texel side of its object per unit tree scale: it opens into its small branches when
+    /// that would be magnified.
+    texel: f32,
+    /// Its object's small-branch placements (indices into [`PlantDraw::small`]; empty: it
+    /// does not open).
+    small: Range<usize>,
+}
+
+/// One small-branch placement inside its main branch's object, ready for the per-frame loop.
+struct SmallDraw {
+    set: u32,
+    to_main: Affine3A,
+    /// Linear part of main branch → small branch (directions).
+    from_main: glam::Mat3A,
+    scale: f32,
+    /// Object box centre (object space) and radius in the main branch's units.
+    centre: Vec3,
+    radius: f32,
+    /// Corners in [0, 1]³ of the main branch's box (to interpolate its visibility).
+    corners_in_main: [Vec3; 8],
+    /// Sky transmittance at each corner from the rest of the main branch.
+    sky: [f32; 8],
 }
 
 /// A distinct baked plant, ready to draw.
@@ -122,6 +145,10 @@ struct PlantDraw {
     ambient: Vec<hb::Mips>,
     /// The branch placements' cube-maps ([`HbtBaked::cubes`]) and their side.
     cubes: Vec<u8>,
+    /// MNP01 §7's small branches, by small placement ([`hb::SmallLevel::placements`]), and
+    /// their cube-maps.
+    small: Vec<SmallDraw>,
+    small_cubes: Vec<u8>,
     cube_resolution: u32,
 }
 
@@ -156,6 +183,7 @@ pub struct Hbt {
     mesh_ranges: [Vec<Range<u32>>; PASSES],
     opened: u32,
     meshed: u32,
+    branches_opened: u32,
 }
 
 impl Hbt {
@@ -175,6 +203,12 @@ impl Hbt {
         self.meshed
     }
 
+    /// Main branches drawn (fully or in transition) as their small branches in the last
+    /// frame's camera pass.
+    pub fn branches_opened(&self) -> u32 {
+        self.branches_opened
+    }
+
     /// Bytes of the visibility structure: the scene's cube-maps (CPU) and the plants' branch
     /// level cube-maps.
     pub fn visibility_bytes(&self) -> u64 {
@@ -182,7 +216,7 @@ impl Hbt {
             + self
                 .plants
                 .iter()
-                .map(|p| p.cubes.len() as u64)
+                .map(|p| (p.cubes.len() + p.small_cubes.len()) as u64)
                 .sum::<u64>()
     }
 
@@ -415,6 +449,7 @@ impl Representation for Hbt {
             };
             let tree_set = out.add(&views, lights.len(), (min, max), &b.direct, &b.ambient);
             let mut placements = Vec::new();
+            let mut small = Vec::new();
             if params.levels >= 2 {
                 let object_sets: Vec<u32> = b
                     .objects
@@ -424,7 +459,43 @@ impl Representation for Hbt {
                         out.add(&bviews, blights.len(), bbox, &o.direct, &o.ambient)
                     })
                     .collect();
+                let small_sets: Vec<u32> = b
+                    .small
+                    .objects
+                    .iter()
+                    .map(|o| {
+                        let bbox = (Vec3::from(o.bbox_min), Vec3::from(o.bbox_max));
+                        out.add(&bviews, blights.len(), bbox, &o.direct, &o.ambient)
+                    })
+                    .collect();
                 let dirs = visibility::directions(b.cube_resolution as usize);
+                // Each small placement in its main branch's object (the ranges list them).
+                for (main, o) in b.objects.iter().enumerate() {
+                    let (mmin, mmax) = (Vec3::from(o.bbox_min), Vec3::from(o.bbox_max));
+                    for index in b.small.range(main) {
+                        let sp = &b.small.placements[index];
+                        let so = &b.small.objects[sp.object as usize];
+                        let (smin, smax) = (Vec3::from(so.bbox_min), Vec3::from(so.bbox_max));
+                        let to_main = sp.affine();
+                        let scale = to_main.matrix3.x_axis.length();
+                        let cube = |k| hb::cube_of(&b.small.cubes, b.cube_resolution, index, k);
+                        small.push(SmallDraw {
+                            set: small_sets[sp.object as usize],
+                            to_main,
+                            from_main: to_main.matrix3.inverse(),
+                            scale,
+                            centre: (smin + smax) * 0.5,
+                            radius: (smax - smin).length() * 0.5 * scale,
+                            corners_in_main: std::array::from_fn(|k| {
+                                let c = to_main.transform_point3(visibility::corner(smin, smax, k));
+                                (c - mmin) / (mmax - mmin).max(Vec3::splat(1e-6))
+                            }),
+                            sky: std::array::from_fn(|k| {
+                                visibility::sky_transmittance(cube(k), &dirs)
+                            }),
+                        });
+                    }
+                }
                 for (index, pl) in b.placements.iter().enumerate() {
                     let o = &b.objects[pl.object as usize];
                     let (omin, omax) = (Vec3::from(o.bbox_min), Vec3::from(o.bbox_max));
@@ -447,6 +518,8 @@ impl Representation for Hbt {
                         corners_in_tree,
                         sky,
                         index,
+                        texel: (omax - omin).max_element() * scale / tile as f32,
+                        small: b.small.range(pl.object as usize),
                     });
                 }
             }
@@ -480,6 +553,8 @@ impl Representation for Hbt {
                 ambient: b.ambient.clone(),
                 cubes: b.cubes.clone(),
                 cube_resolution: b.cube_resolution,
+                small,
+                small_cubes: b.small.cubes.clone(),
             });
         }
         let device = &gpu.device;
@@ -592,6 +667,7 @@ impl Representation for Hbt {
             mesh_ranges: std::array::from_fn(|_| vec![0..0; species_count]),
             opened: 0,
             meshed: 0,
+            branches_opened: 0,
         })
     }
 
@@ -600,6 +676,7 @@ impl Representation for Hbt {
         self.mesh_staging.clear();
         self.opened = 0;
         self.meshed = 0;
+        self.branches_opened = 0;
         let with_meshes = self.params.levels >= 3;
         let sun = input.sun_dir;
         let light = self
@@ -756,20 +833,84 @@ impl Representation for Hbt {
                             sun_vis[k] = branch * trilinear(tree_sun, q);
                             sky_vis[k] = pl.sky[k] * trilinear(tree_sky, q);
                         }
-                        let inst = billboard(
-                            &to_world,
-                            pl.set,
-                            self.branch_views
-                                .lookup(in_object(to_model_dir(eye_o, c, sn))),
-                            self.branch_lights.lookup(in_object(light_model)),
-                            p.min_weight,
-                            (sun_vis, sky_vis),
-                            rec.rot[2],
-                            open * presence,
-                            scale * pl.scale,
-                            pl.radius * scale,
-                        );
-                        self.sort.push((eye_o.length_squared(), inst));
+                        // MNP01 §4 one level down: the main branch opens into its small
+                        // branches when its own texels would be magnified.
+                        let split = if pl.small.is_empty() {
+                            0.0
+                        } else {
+                            let px = pl.texel * scale * input.pixels_per_metre
+                                / eye_o.length().max(1e-3);
+                            smoothstep(lo_px, hi_px, px)
+                        };
+                        let here = open * presence;
+                        if (1.0 - split) * here > 0.002 {
+                            let mut inst = billboard(
+                                &to_world,
+                                pl.set,
+                                self.branch_views
+                                    .lookup(in_object(to_model_dir(eye_o, c, sn))),
+                                self.branch_lights.lookup(in_object(light_model)),
+                                p.min_weight,
+                                (sun_vis, sky_vis),
+                                rec.rot[2],
+                                (1.0 - split) * here,
+                                scale * pl.scale,
+                                pl.radius * scale,
+                            );
+                            inst.lights[3] = 1;
+                            self.sort.push((eye_o.length_squared(), inst));
+                        }
+                        if split * here <= 0.002 {
+                            continue;
+                        }
+                        self.branches_opened += 1;
+                        for index in pl.small.clone() {
+                            let sd = &plant.small[index];
+                            let to_world = to_world * sd.to_main;
+                            let centre = to_world.transform_point3(sd.centre);
+                            let eye_s = input.eye - centre;
+                            let in_small = |d: Vec3| {
+                                (sd.from_main * (pl.from_plant * d)).normalize_or(Vec3::Y)
+                            };
+                            let mut s_sun = [1.0; 8];
+                            let mut s_sky = [1.0; 8];
+                            for k in 0..visibility::CORNERS {
+                                let q = sd.corners_in_main[k];
+                                let own = if cube_sun {
+                                    let cube = hb::cube_of(
+                                        &plant.small_cubes,
+                                        plant.cube_resolution,
+                                        index,
+                                        k,
+                                    );
+                                    1.0 - visibility::lookup(
+                                        cube,
+                                        res,
+                                        sd.from_main * (pl.from_plant * sun_model),
+                                    )
+                                } else {
+                                    1.0
+                                };
+                                // The three levels combined: 1 − Π(1 − opacity).
+                                s_sun[k] = own * trilinear(sun_vis, q);
+                                s_sky[k] = sd.sky[k] * trilinear(sky_vis, q);
+                            }
+                            let mut inst = billboard(
+                                &to_world,
+                                sd.set,
+                                self.branch_views
+                                    .lookup(in_small(to_model_dir(eye_s, c, sn))),
+                                self.branch_lights.lookup(in_small(light_model)),
+                                p.min_weight,
+                                (s_sun, s_sky),
+                                rec.rot[2],
+                                split * here,
+                                scale * pl.scale * sd.scale,
+                                sd.radius * pl.scale * scale,
+                            );
+                            inst.lights[3] = 2;
+                            self.sort.push((eye_s.length_squared(), inst));
+                        }
                     }
                 }
                 self.mesh_ranges[pass][s] = mesh_start..self.mesh_staging.len() as u32;

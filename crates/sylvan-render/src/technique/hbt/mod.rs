@@ -197,6 +197,10 @@ pub struct HbtParams {
     /// With `levels` ≥ 2: bake the tree level by rendering the level below with the runtime
     /// algorithm (MNP01 §6.1), so the two levels shade alike; otherwise from geometry.
     pub tree_from_branches: bool,
+    /// With `levels` ≥ 2: also bake MNP01 §7's third BTF level, each main branch's small
+    /// branches ([`bake::small_level`]); an opened tree then opens each main branch into them
+    /// where that branch's texels would be magnified.
+    pub small_branches: bool,
     /// Draw only: received sun shadows from cube-maps or cascades.
     pub shadows: HbtShadows,
     /// View-direction set: subdivision level 0..=3 (6, 18, 66 or 258 samples).
@@ -237,6 +241,7 @@ impl Default for HbtParams {
             mesh_texel_pixels: 0.35,
             band: 0.3,
             tree_from_branches: false,
+            small_branches: false,
             // Measured: MNP01's 8-corner interpolation under-darkens a tree in another's shadow
             // (0.080 vs the reference's 0.289 on the test grove; cascades 0.301), see BENCHMARKS.md.
             shadows: HbtShadows::Cascades,
