@@ -90,11 +90,16 @@ struct HbtSummary {
     branch_objects: usize,
     /// Where the level below places them.
     branch_placements: usize,
+    /// Small-branch level (`--hbt-small-branches`): its objects (representatives and main
+    /// branches' rests).
+    small_objects: usize,
+    /// Their placements in the main branches.
+    small_placements: usize,
     /// Image bytes of the tree level (all mips).
     tree_bytes: u64,
-    /// Image bytes of the level below.
+    /// Image bytes of the levels below (main and small branches).
     branch_bytes: u64,
-    /// Bytes of the branch level's visibility cube-maps.
+    /// Bytes of the branch levels' visibility cube-maps.
     cube_bytes: u64,
 }
 
@@ -178,12 +183,14 @@ pub fn run(args: BakeCmdArgs) -> anyhow::Result<()> {
         TechniqueKind::Hbt => {
             let (baked, mut common) = bake_one::<Hbt>(&args, &plant, &args.bake.hbt()?)?;
             let (tree_bytes, branch_bytes) = baked.image_bytes();
-            common.image_bytes = tree_bytes + branch_bytes + baked.cubes.len() as u64;
+            let cube_bytes = (baked.cubes.len() + baked.small.cubes.len()) as u64;
+            common.image_bytes = tree_bytes + branch_bytes + cube_bytes;
             common.images = baked.direct.len()
                 + baked.ambient.len()
                 + baked
                     .objects
                     .iter()
+                    .chain(&baked.small.objects)
                     .map(|o| o.direct.len() + o.ambient.len())
                     .sum::<usize>();
             common.tile = baked.tile;
@@ -192,9 +199,11 @@ pub fn run(args: BakeCmdArgs) -> anyhow::Result<()> {
                 lights: baked.lights(),
                 branch_objects: baked.objects.len(),
                 branch_placements: baked.placements.len(),
+                small_objects: baked.small.objects.len(),
+                small_placements: baked.small.placements.len(),
                 tree_bytes,
                 branch_bytes,
-                cube_bytes: baked.cubes.len() as u64,
+                cube_bytes,
                 common,
             };
             let line = format!(

@@ -264,10 +264,6 @@ impl HbtBaked {
         if !(1..=MAX_CUBE_RESOLUTION).contains(&cube_resolution) {
             return Err(bad(format!("cube-map resolution {cube_resolution}")));
         }
-        let arr3 = |v: Vec<f32>| -> Result<[f32; 3], DecodeError> {
-            v.try_into()
-                .map_err(|_| DecodeError("bounding box corner is not 3 floats".into()))
-        };
         let bbox_min = arr3(d.f32s()?)?;
         let bbox_max = arr3(d.f32s()?)?;
         let counts = crate::directions::SAMPLE_COUNTS;
@@ -344,6 +340,12 @@ fn encode_level(e: &mut Encoder, objects: &[ObjectBtf], placements: &[Placement]
     e.bytes(cubes);
 }
 
+/// A bounding-box corner as stored.
+fn arr3(v: Vec<f32>) -> Result<[f32; 3], DecodeError> {
+    v.try_into()
+        .map_err(|_| DecodeError("bounding box corner is not 3 floats".into()))
+}
+
 /// A level below the tree as stored: objects, placements, cube-maps.
 type LevelPayload = (Vec<ObjectBtf>, Vec<Placement>, Vec<u8>);
 
@@ -356,10 +358,6 @@ fn decode_level(
     cube_resolution: u32,
 ) -> Result<LevelPayload, DecodeError> {
     let bad = |m: String| DecodeError(m);
-    let arr3 = |v: Vec<f32>| -> Result<[f32; 3], DecodeError> {
-        v.try_into()
-            .map_err(|_| DecodeError("bounding box corner is not 3 floats".into()))
-    };
     let nobjects = d.u64()?;
     // Each object takes at least its header and images; a huge count fails here.
     if nobjects > d.remaining() as u64 / 64 {

@@ -81,20 +81,56 @@ impl GpuHbtInstance {
     };
 }
 
-/// One placement of the level below, ready for the per-frame loop.
-struct PlacementDraw {
+/// An object placed in its parent (a main branch in the tree, a small branch in its main
+/// branch), ready for the per-frame loop.
+struct Placed {
     set: u32,
-    to_plant: Affine3A,
-    /// Linear part of plant → object (directions).
-    from_plant: glam::Mat3A,
+    to_parent: Affine3A,
+    /// Linear part of parent → object (directions).
+    from_parent: glam::Mat3A,
     scale: f32,
-    /// Object box centre (object space) and world radius per unit tree scale.
+    /// Object box centre (object space) and radius in the parent's units.
     centre: Vec3,
     radius: f32,
-    /// Corners in [0, 1]³ of the tree's box (for the top level's trilinear weights).
-    corners_in_tree: [Vec3; 8],
-    /// Sky transmittance at each corner from the rest of the tree.
+    /// Its corners in [0, 1]³ of the parent's box (to interpolate the parent's visibility).
+    corners_in_parent: [Vec3; 8],
+    /// Sky transmittance at each corner from the rest of the parent.
     sky: [f32; 8],
+}
+
+impl Placed {
+    /// `placement` of an object of image set `set` and box `bbox`, inside a parent of box
+    /// `parent`; `cube(k)` is its cube-map at corner `k` (directions `dirs`).
+    fn new<'c>(
+        set: u32,
+        placement: &hb::Placement,
+        bbox: (Vec3, Vec3),
+        parent: (Vec3, Vec3),
+        cube: impl Fn(usize) -> &'c [u8],
+        dirs: &[Vec3],
+    ) -> Self {
+        let (min, max) = bbox;
+        let to_parent = placement.affine();
+        let scale = to_parent.matrix3.x_axis.length();
+        Placed {
+            set,
+            to_parent,
+            from_parent: to_parent.matrix3.inverse(),
+            scale,
+            centre: (min + max) * 0.5,
+            radius: (max - min).length() * 0.5 * scale,
+            corners_in_parent: std::array::from_fn(|k| {
+                let c = to_parent.transform_point3(visibility::corner(min, max, k));
+                (c - parent.0) / (parent.1 - parent.0).max(Vec3::splat(1e-6))
+            }),
+            sky: std::array::from_fn(|k| visibility::sky_transmittance(cube(k), dirs)),
+        }
+    }
+}
+
+/// One placement of the level below the tree, ready for the per-frame loop.
+struct PlacementDraw {
+    placed: Placed,
     /// Index of the placement in its plant's baked cube-maps.
     index: usize,
     /// Texel side of its object per unit tree scale: it opens into its small branches when
@@ -103,22 +139,6 @@ struct PlacementDraw {
     /// Its object's small-branch placements (indices into [`PlantDraw::small`]; empty: it
     /// does not open).
     small: Range<usize>,
-}
-
-/// One small-branch placement inside its main branch's object, ready for the per-frame loop.
-struct SmallDraw {
-    set: u32,
-    to_main: Affine3A,
-    /// Linear part of main branch → small branch (directions).
-    from_main: glam::Mat3A,
-    scale: f32,
-    /// Object box centre (object space) and radius in the main branch's units.
-    centre: Vec3,
-    radius: f32,
-    /// Corners in [0, 1]³ of the main branch's box (to interpolate its visibility).
-    corners_in_main: [Vec3; 8],
-    /// Sky transmittance at each corner from the rest of the main branch.
-    sky: [f32; 8],
 }
 
 /// A distinct baked plant, ready to draw.
@@ -147,7 +167,7 @@ struct PlantDraw {
     cubes: Vec<u8>,
     /// MNP01 §7's small branches, by small placement ([`hb::SmallLevel::placements`]), and
     /// their cube-maps.
-    small: Vec<SmallDraw>,
+    small: Vec<Placed>,
     small_cubes: Vec<u8>,
     cube_resolution: u32,
 }
@@ -469,56 +489,36 @@ impl Representation for Hbt {
                     })
                     .collect();
                 let dirs = visibility::directions(b.cube_resolution as usize);
+                let bbox = |o: &hb::ObjectBtf| (Vec3::from(o.bbox_min), Vec3::from(o.bbox_max));
                 // Each small placement in its main branch's object (the ranges list them).
                 for (main, o) in b.objects.iter().enumerate() {
-                    let (mmin, mmax) = (Vec3::from(o.bbox_min), Vec3::from(o.bbox_max));
                     for index in b.small.range(main) {
                         let sp = &b.small.placements[index];
-                        let so = &b.small.objects[sp.object as usize];
-                        let (smin, smax) = (Vec3::from(so.bbox_min), Vec3::from(so.bbox_max));
-                        let to_main = sp.affine();
-                        let scale = to_main.matrix3.x_axis.length();
-                        let cube = |k| hb::cube_of(&b.small.cubes, b.cube_resolution, index, k);
-                        small.push(SmallDraw {
-                            set: small_sets[sp.object as usize],
-                            to_main,
-                            from_main: to_main.matrix3.inverse(),
-                            scale,
-                            centre: (smin + smax) * 0.5,
-                            radius: (smax - smin).length() * 0.5 * scale,
-                            corners_in_main: std::array::from_fn(|k| {
-                                let c = to_main.transform_point3(visibility::corner(smin, smax, k));
-                                (c - mmin) / (mmax - mmin).max(Vec3::splat(1e-6))
-                            }),
-                            sky: std::array::from_fn(|k| {
-                                visibility::sky_transmittance(cube(k), &dirs)
-                            }),
-                        });
+                        small.push(Placed::new(
+                            small_sets[sp.object as usize],
+                            sp,
+                            bbox(&b.small.objects[sp.object as usize]),
+                            bbox(o),
+                            |k| hb::cube_of(&b.small.cubes, b.cube_resolution, index, k),
+                            &dirs,
+                        ));
                     }
                 }
                 for (index, pl) in b.placements.iter().enumerate() {
                     let o = &b.objects[pl.object as usize];
-                    let (omin, omax) = (Vec3::from(o.bbox_min), Vec3::from(o.bbox_max));
-                    let to_plant = pl.affine();
-                    let mut corners_in_tree = [Vec3::ZERO; 8];
-                    let mut sky = [1.0; 8];
-                    for k in 0..visibility::CORNERS {
-                        let c = to_plant.transform_point3(visibility::corner(omin, omax, k));
-                        corners_in_tree[k] = (c - min) / (max - min).max(Vec3::splat(1e-6));
-                        sky[k] = visibility::sky_transmittance(b.cube(index, k), &dirs);
-                    }
-                    let scale = to_plant.matrix3.x_axis.length();
+                    let placed = Placed::new(
+                        object_sets[pl.object as usize],
+                        pl,
+                        bbox(o),
+                        (min, max),
+                        |k| b.cube(index, k),
+                        &dirs,
+                    );
+                    let (omin, omax) = bbox(o);
                     placements.push(PlacementDraw {
-                        set: object_sets[pl.object as usize],
-                        to_plant,
-                        from_plant: to_plant.matrix3.inverse(),
-                        scale,
-                        centre: (omin + omax) * 0.5,
-                        radius: (omax - omin).length() * 0.5 * scale,
-                        corners_in_tree,
-                        sky,
+                        texel: (omax - omin).max_element() * placed.scale / tile as f32,
+                        placed,
                         index,
-                        texel: (omax - omin).max_element() * scale / tile as f32,
                         small: b.small.range(pl.object as usize),
                     });
                 }
@@ -812,14 +812,15 @@ impl Representation for Hbt {
                     let sun_model = to_model_dir(sun, c, sn);
                     let res = plant.cube_resolution as usize;
                     for pl in &plant.placements {
-                        let to_world = tree.to_world * pl.to_plant;
-                        let centre = to_world.transform_point3(pl.centre);
+                        let pp = &pl.placed;
+                        let to_world = tree.to_world * pp.to_parent;
+                        let centre = to_world.transform_point3(pp.centre);
                         let eye_o = input.eye - centre;
-                        let in_object = |d: Vec3| (pl.from_plant * d).normalize_or(Vec3::Y);
+                        let in_object = |d: Vec3| (pp.from_parent * d).normalize_or(Vec3::Y);
                         let mut sun_vis = [1.0; 8];
                         let mut sky_vis = [1.0; 8];
                         for k in 0..visibility::CORNERS {
-                            let q = pl.corners_in_tree[k];
+                            let q = pp.corners_in_parent[k];
                             let branch = if cube_sun {
                                 1.0 - visibility::lookup(
                                     hb::cube_of(&plant.cubes, plant.cube_resolution, pl.index, k),
@@ -831,7 +832,7 @@ impl Representation for Hbt {
                             };
                             // MNP01 §4.2: levels combine as 1 − Π(1 − opacity).
                             sun_vis[k] = branch * trilinear(tree_sun, q);
-                            sky_vis[k] = pl.sky[k] * trilinear(tree_sky, q);
+                            sky_vis[k] = pp.sky[k] * trilinear(tree_sky, q);
                         }
                         // MNP01 §4 one level down: the main branch opens into its small
                         // branches when its own texels would be magnified.
@@ -846,7 +847,7 @@ impl Representation for Hbt {
                         if (1.0 - split) * here > 0.002 {
                             let mut inst = billboard(
                                 &to_world,
-                                pl.set,
+                                pp.set,
                                 self.branch_views
                                     .lookup(in_object(to_model_dir(eye_o, c, sn))),
                                 self.branch_lights.lookup(in_object(light_model)),
@@ -854,8 +855,8 @@ impl Representation for Hbt {
                                 (sun_vis, sky_vis),
                                 rec.rot[2],
                                 (1.0 - split) * here,
-                                scale * pl.scale,
-                                pl.radius * scale,
+                                scale * pp.scale,
+                                pp.radius * scale,
                             );
                             inst.lights[3] = 1;
                             self.sort.push((eye_o.length_squared(), inst));
@@ -866,16 +867,16 @@ impl Representation for Hbt {
                         self.branches_opened += 1;
                         for index in pl.small.clone() {
                             let sd = &plant.small[index];
-                            let to_world = to_world * sd.to_main;
+                            let to_world = to_world * sd.to_parent;
                             let centre = to_world.transform_point3(sd.centre);
                             let eye_s = input.eye - centre;
                             let in_small = |d: Vec3| {
-                                (sd.from_main * (pl.from_plant * d)).normalize_or(Vec3::Y)
+                                (sd.from_parent * (pp.from_parent * d)).normalize_or(Vec3::Y)
                             };
                             let mut s_sun = [1.0; 8];
                             let mut s_sky = [1.0; 8];
                             for k in 0..visibility::CORNERS {
-                                let q = sd.corners_in_main[k];
+                                let q = sd.corners_in_parent[k];
                                 let own = if cube_sun {
                                     let cube = hb::cube_of(
                                         &plant.small_cubes,
@@ -886,7 +887,7 @@ impl Representation for Hbt {
                                     1.0 - visibility::lookup(
                                         cube,
                                         res,
-                                        sd.from_main * (pl.from_plant * sun_model),
+                                        sd.from_parent * (pp.from_parent * sun_model),
                                     )
                                 } else {
                                     1.0
@@ -905,8 +906,8 @@ impl Representation for Hbt {
                                 (s_sun, s_sky),
                                 rec.rot[2],
                                 split * here,
-                                scale * pl.scale * sd.scale,
-                                sd.radius * pl.scale * scale,
+                                scale * pp.scale * sd.scale,
+                                sd.radius * pp.scale * scale,
                             );
                             inst.lights[3] = 2;
                             self.sort.push((eye_s.length_squared(), inst));

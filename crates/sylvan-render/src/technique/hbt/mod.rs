@@ -1,6 +1,7 @@
 //! Technique `hbt`: MNP01 — Meyer, Neyret, Poulin, *Interactive Rendering of Trees with
-//! Shading and Shadows*, EGWR 2001. Three levels of the hierarchy: the tree, below it its main
-//! branches and the rest of the plant, and at the bottom the plant's own meshes.
+//! Shading and Shadows*, EGWR 2001. Levels of the hierarchy: the tree, below it its main
+//! branches and the rest of the plant, optionally (§7's third BTF level) each main branch's
+//! small branches, and at the bottom the plant's own meshes.
 //!
 //! Implements:
 //! - §3.1 the **bidirectional texture function** of a base object: one billboard per (view
@@ -19,6 +20,10 @@
 //!   and (`levels` = 3, the default) §4's polygonal bottom: "the objects in the opened levels
 //!   of the hierarchy, either polygonal meshes or BTF" — the plant's meshes, drawn with the
 //!   `geometry` technique's pipelines;
+//! - §7's **small-branch level** ([`HbtParams::small_branches`], [`bake::small_level`]): each
+//!   main branch's small branches with their BTFs, placements in the main branch's frame and
+//!   cube-maps of the rest of the main branch; an opened tree opens each main branch into them
+//!   by that branch's own texel size, and their visibility combines all three levels;
 //! - §3.3/§6.2 the **hierarchy of visibility cube-maps** ([`visibility`]): for each branch
 //!   placement (baked) and each placed tree (built when the scene is placed, [`scene`]), a
 //!   cube-map at each of the 8 corners of its box holding the opacity of the rest of its level —
@@ -51,19 +56,33 @@
 //!   instanced ones. At most [`HbtParams::max_branch_objects`] are baked, and the others are
 //!   drawn with the representative of their size group, scaled (16 by default: with 6, a pine
 //!   70 px tall drawn from its branches was visibly wrong, ꟻLIP 0.059 against 0.049).
-//! - **Two BTF levels, then meshes** (MNP01 §7 has three BTF levels: small branches too). The
-//!   meshes open early — when the main branches' texels would cover 0.35 px, well before they
+//! - **Two BTF levels by default, then meshes** (MNP01 §7 has three BTF levels: small
+//!   branches too; here they are opt-in). The small branches of a main branch are the largest
+//!   branch objects below it at most half its size ([`bake::SMALL_BRANCH_RATIO`]), not a fixed
+//!   instancing depth: an L-system's bracket nesting makes each branch contain the rest of
+//!   itself, a chain. The presets have almost none (the pine's main branches are single
+//!   needled axes; only 3 of its 17 main-branch objects split, into a tip and a rest nearly as
+//!   long as the branch; the prunus's and bush's main branches are leaf twigs), so they gain
+//!   nothing; on `assets/plants/fir.lsys`, built as MNP01's pine, the level improves on the
+//!   main branches alone (one fir 244 px tall: ꟻLIP 0.198 against 0.205) but stays far behind
+//!   its meshes (0.101), and on the default view it makes the pine's meshes open later
+//!   (0.048 against 0.044) — so it is off. A main branch's rest stays a BTF as long as the
+//!   branch. The meshes open early — when the main branches' texels would cover 0.35 px, well before they
 //!   are magnified: measured on the default view at 1280×720, magnified branch BTFs are both
 //!   slower (overlapping billboards, 12 fetches per fragment) and further from the reference
 //!   than the meshes (ꟻLIP 0.094 with the BTF levels only, 0.044 with meshes; BENCHMARKS.md).
 //!   With the pine the branch level is then drawn only within the cross-fades (the prunus,
 //!   whose branches are smaller against the tree, keeps a band of its own). A tree opens into
 //!   its meshes as a whole, not branch by branch.
+//! - **Representatives are turned**: a group member is drawn with its representative scaled by
+//!   the ratio of their diagonals and turned about its base so that its centroid points where
+//!   the member's does (objects that differ only by the turn at their bracket — a bough left or
+//!   right of its branch, a main branch pitched more or less — share one BTF).
 //! - **By default each level is baked from geometry.** MNP01 §6.1 renders a higher level from
 //!   the lower level's BTFs with the runtime algorithm so that levels shade alike:
 //!   [`HbtParams::tree_from_branches`] does that for the tree level (`compose.rs`, on the CPU).
 //!   Measured, it switches to the branches more smoothly (ꟻLIP between the levels at the switch
-//!   0.104 against 0.119) but is blurrier, the branches' reconstruction being resampled and
+//!   0.102 against 0.112) but is blurrier, the branches' reconstruction being resampled and
 //!   reconstructed again (one pine 30 px tall, back-lit: 0.080 against 0.068; default view
 //!   0.0516 against 0.0492 at 1280×720), so it is not the default.
 //! - **Received sun shadows come from the cascaded shadow maps by default**
@@ -95,8 +114,10 @@
 //! object, plus the branch cube-maps; per frame, 2 direction look-ups per billboard (CPU) and
 //! 8 cube-map look-ups per opened branch, one instanced draw per pass, up to 9 + 3 texture
 //! fetches per fragment; meshes as `geometry`. Memory (default, per plant): tree BTF 66 × 18 at
-//! 32 px = 7.2 MB; up to 17 objects × 18 × 18 = 33 MB; the plant's meshes; branch cube-maps 6·8² bytes × 8 corners per placement; the
-//! scene's cube-maps 3 KB per tree (CPU). Figures in BENCHMARKS.md.
+//! 32 px = 7.2 MB; up to 17 objects × 18 × 18 = 33 MB; the plant's meshes; branch cube-maps
+//! 6·8² bytes × 8 corners per placement; the scene's cube-maps 3 KB per tree (CPU). With small
+//! branches, up to 16 more representatives plus one rest per opening main branch, ~2 MB each
+//! (the fir: 49 MB below the tree instead of 18 MB). Figures in BENCHMARKS.md.
 
 pub mod bake;
 mod compose;
@@ -199,7 +220,8 @@ pub struct HbtParams {
     pub tree_from_branches: bool,
     /// With `levels` ≥ 2: also bake MNP01 §7's third BTF level, each main branch's small
     /// branches ([`bake::small_level`]); an opened tree then opens each main branch into them
-    /// where that branch's texels would be magnified.
+    /// where that branch's texels would be magnified. Off by default: measured, it gains
+    /// little on a plant built for it and nothing on the presets (module docs, BENCHMARKS.md).
     pub small_branches: bool,
     /// Draw only: received sun shadows from cube-maps or cascades.
     pub shadows: HbtShadows,
