@@ -890,6 +890,33 @@ fn main_branches_open_into_their_small_branches() {
     );
     assert_eq!(HbtBaked::decode(&b.encode()).unwrap(), b);
 
+    // MNP01 §6.1 one level down: main branches rendered from their small branches cover what
+    // the geometry bake of the same branches covers (view by view, mean coverage).
+    let composed = hbt::bake::bake(
+        &gpu,
+        &plant,
+        &HbtParams {
+            tree_from_branches: true,
+            ..p.clone()
+        },
+        |_, _| {},
+    )
+    .expect("composed bake");
+    let cover = |img: &[Vec<u8>]| img[0].chunks(4).map(|t| t[3] as f32).sum::<f32>();
+    let views = b.objects[0].ambient.len() / 2;
+    for k in (0..b.objects.len()).filter(|&k| !s.range(k).is_empty()) {
+        let (geo, comp) = (&b.objects[k], &composed.objects[k]);
+        assert_ne!(geo.direct, comp.direct, "main branch {k} was not composed");
+        let (g, c): (f32, f32) = (0..views)
+            .map(|v| (cover(&geo.ambient[v]), cover(&comp.ambient[v])))
+            .fold((0.0, 0.0), |a, x| (a.0 + x.0, a.1 + x.1));
+        eprintln!("main branch {k}: coverage composed / geometry {:.3}", c / g);
+        assert!(
+            (c / g - 1.0).abs() < 0.25,
+            "main branch {k}: composed coverage {c} vs geometry {g}"
+        );
+    }
+
     // The switch: the largest opening main branch, just outside and just inside the distance
     // where its texels would cover `open_texel_pixels` (the tree is long opened there). Bound
     // as tree → branches: the switch changes the picture less than either level already

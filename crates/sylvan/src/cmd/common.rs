@@ -107,7 +107,7 @@ pub struct BakeArgs {
     /// hbt: cross-fade band around each level switch, relative to the switch (0 = hard switches).
     #[arg(long, default_value_t = HbtParams::default().band)]
     pub hbt_band: f32,
-    /// hbt: bake the tree level from `geometry` or by rendering its `branches` with the runtime algorithm (MNP01 §6.1).
+    /// hbt: bake the tree level from `geometry` or by rendering its `branches` with the runtime algorithm (MNP01 §6.1); with --hbt-small-branches, main branches are rendered from their small branches too.
     #[arg(long, default_value = "geometry")]
     pub hbt_tree_from: String,
     /// hbt (levels 2 and 3): also bake MNP01's small-branch level below each main branch (branch objects at most half its size) and open main branches into it where their texels would be magnified.

@@ -1311,13 +1311,43 @@ pub fn bake(
     let small_placements = placed(&small);
     let lut = DirectionLut::new(&bviews, DirectionLut::DEFAULT_RESOLUTION).map_err(option)?;
     let res = p.cube_resolution as usize;
-    let cubes = branch_cubes(&objects, &placements, &lut, p.tile, res);
     // MNP01 §3.3 one level down: each small branch sees the rest of its own main branch.
     let mut small_cubes = Vec::new();
     for r in &small.ranges {
         let within = &small_placements[r[0] as usize..r[1] as usize];
         small_cubes.extend(branch_cubes(&small_objects, within, &lut, p.tile, res));
     }
+    // MNP01 §6.1 one level down: a main branch with small branches rendered from them.
+    if compose {
+        let per = visibility::CORNERS * visibility::FACES * res * res;
+        for (k, r) in small.ranges.iter().enumerate() {
+            let (a, b) = (r[0] as usize, r[1] as usize);
+            if a == b {
+                continue;
+            }
+            let o = &objects[k];
+            let (direct, ambient) = super::compose::tree_level(
+                &super::compose::LevelBelow {
+                    objects: &small_objects,
+                    placements: &small_placements[a..b],
+                    cubes: &small_cubes[a * per..b * per],
+                    cube_resolution: p.cube_resolution,
+                    branch_views: &bviews,
+                    branch_lights: &blights,
+                },
+                &bviews,
+                &blights,
+                (Vec3::from(o.bbox_min), Vec3::from(o.bbox_max)),
+                p.tile,
+                p.supersample.min(2),
+                p.min_weight,
+            )
+            .map_err(option)?;
+            objects[k].direct = direct;
+            objects[k].ambient = ambient;
+        }
+    }
+    let cubes = branch_cubes(&objects, &placements, &lut, p.tile, res);
     if compose {
         (direct, ambient) = super::compose::tree_level(
             &super::compose::LevelBelow {

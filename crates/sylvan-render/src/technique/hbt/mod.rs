@@ -80,7 +80,8 @@
 //!   right of its branch, a main branch pitched more or less — share one BTF).
 //! - **By default each level is baked from geometry.** MNP01 §6.1 renders a higher level from
 //!   the lower level's BTFs with the runtime algorithm so that levels shade alike:
-//!   [`HbtParams::tree_from_branches`] does that for the tree level (`compose.rs`, on the CPU).
+//!   [`HbtParams::tree_from_branches`] does that for the tree level (`compose.rs`, on the CPU)
+//!   and, with small branches, for each main branch from its small branches.
 //!   Measured, it switches to the branches more smoothly (ꟻLIP between the levels at the switch
 //!   0.102 against 0.112) but is blurrier, the branches' reconstruction being resampled and
 //!   reconstructed again (one pine 30 px tall, back-lit: 0.080 against 0.068; default view
@@ -216,7 +217,9 @@ pub struct HbtParams {
     /// Draw only: the cross-fade band around those switches, relative (0 = hard switch).
     pub band: f32,
     /// With `levels` ≥ 2: bake the tree level by rendering the level below with the runtime
-    /// algorithm (MNP01 §6.1), so the two levels shade alike; otherwise from geometry.
+    /// algorithm (MNP01 §6.1), so the two levels shade alike; otherwise from geometry. With
+    /// [`HbtParams::small_branches`], each main branch that has small branches is likewise
+    /// rendered from them first.
     pub tree_from_branches: bool,
     /// With `levels` ≥ 2: also bake MNP01 §7's third BTF level, each main branch's small
     /// branches ([`bake::small_level`]); an opened tree then opens each main branch into them
