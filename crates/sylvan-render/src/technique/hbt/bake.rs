@@ -1326,7 +1326,7 @@ pub fn bake(
                 continue;
             }
             let o = &objects[k];
-            let (direct, ambient) = super::compose::tree_level(
+            let (direct, ambient) = super::compose::from_level_below(
                 &super::compose::LevelBelow {
                     objects: &small_objects,
                     placements: &small_placements[a..b],
@@ -1349,7 +1349,7 @@ pub fn bake(
     }
     let cubes = branch_cubes(&objects, &placements, &lut, p.tile, res);
     if compose {
-        (direct, ambient) = super::compose::tree_level(
+        (direct, ambient) = super::compose::from_level_below(
             &super::compose::LevelBelow {
                 objects: &objects,
                 placements: &placements,

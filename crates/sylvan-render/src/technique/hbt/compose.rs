@@ -1,5 +1,5 @@
-//! MNP01 §6.1: the tree level's BTF rendered from the level below "with the runtime
-//! algorithm", so that the two levels shade alike.
+//! MNP01 §6.1: a level's BTF (the tree's, or a main branch's) rendered from the level below
+//! "with the runtime algorithm", so that the two levels shade alike.
 //!
 //! For each tree view sample, every placement of the level below is drawn as the runtime draws
 //! it — a billboard facing the (orthographic) camera through the object's box centre, its 3 view
@@ -113,12 +113,13 @@ pub(super) struct LevelBelow<'a> {
     pub branch_lights: &'a DirectionSet,
 }
 
-/// The tree level's `direct[view · lights + light]` and `ambient` (sky-facing images, then
-/// ground-facing) for the box `min..max`, rendered from the level below at `tile · ss` texels
+/// An object's `direct[view · lights + light]` and `ambient` (sky-facing images, then
+/// ground-facing) for its box `min..max` (the tree, or a main branch in its own frame),
+/// rendered from the level below (placed in that frame) at `tile · ss` texels
 /// per side and filtered down to `tile`. Fails only if the level below's direction tables
 /// cannot be built.
 #[allow(clippy::too_many_arguments)]
-pub(super) fn tree_level(
+pub(super) fn from_level_below(
     below: &LevelBelow<'_>,
     views: &DirectionSet,
     lights: &DirectionSet,
@@ -441,7 +442,7 @@ mod tests {
             branch_lights: &lights,
         };
         let (direct, ambient) =
-            tree_level(&below, &views, &lights, (min, max), tile as u32, 1, 0.05).unwrap();
+            from_level_below(&below, &views, &lights, (min, max), tile as u32, 1, 0.05).unwrap();
         assert_eq!(direct.len(), objects[0].direct.len());
         assert_eq!(ambient.len(), objects[0].ambient.len());
         let worst = |a: &[Mips], b: &[Mips]| {

@@ -128,6 +128,30 @@ impl Placed {
     }
 }
 
+impl Placed {
+    /// Sun and sky transmittance at its 8 corners: its own cube-maps (`cubes`, the rest of its
+    /// parent, laid out in the parent's frame; the sun from them only when `sun` — the sun in
+    /// the parent's frame — is given) times the
+    /// parent's transmittance `parent` interpolated at its corners (MNP01 §4.2: levels
+    /// combine as 1 − Π(1 − opacity)).
+    fn visibility<'c>(
+        &self,
+        parent: ([f32; 8], [f32; 8]),
+        cubes: impl Fn(usize) -> &'c [u8],
+        res: usize,
+        sun: Option<Vec3>,
+    ) -> ([f32; 8], [f32; 8]) {
+        let mut out = ([1.0; 8], [1.0; 8]);
+        for k in 0..visibility::CORNERS {
+            let q = self.corners_in_parent[k];
+            let own = sun.map_or(1.0, |d| 1.0 - visibility::lookup(cubes(k), res, d));
+            out.0[k] = own * trilinear(parent.0, q);
+            out.1[k] = self.sky[k] * trilinear(parent.1, q);
+        }
+        out
+    }
+}
+
 /// One placement of the level below the tree, ready for the per-frame loop.
 struct PlacementDraw {
     placed: Placed,
@@ -817,23 +841,12 @@ impl Representation for Hbt {
                         let centre = to_world.transform_point3(pp.centre);
                         let eye_o = input.eye - centre;
                         let in_object = |d: Vec3| (pp.from_parent * d).normalize_or(Vec3::Y);
-                        let mut sun_vis = [1.0; 8];
-                        let mut sky_vis = [1.0; 8];
-                        for k in 0..visibility::CORNERS {
-                            let q = pp.corners_in_parent[k];
-                            let branch = if cube_sun {
-                                1.0 - visibility::lookup(
-                                    hb::cube_of(&plant.cubes, plant.cube_resolution, pl.index, k),
-                                    res,
-                                    sun_model,
-                                )
-                            } else {
-                                1.0
-                            };
-                            // MNP01 §4.2: levels combine as 1 − Π(1 − opacity).
-                            sun_vis[k] = branch * trilinear(tree_sun, q);
-                            sky_vis[k] = pp.sky[k] * trilinear(tree_sky, q);
-                        }
+                        let (sun_vis, sky_vis) = pp.visibility(
+                            (tree_sun, tree_sky),
+                            |k| hb::cube_of(&plant.cubes, plant.cube_resolution, pl.index, k),
+                            res,
+                            cube_sun.then_some(sun_model),
+                        );
                         // MNP01 §4 one level down: the main branch opens into its small
                         // branches when its own texels would be magnified.
                         let split = if pl.small.is_empty() {
@@ -870,32 +883,17 @@ impl Representation for Hbt {
                             let to_world = to_world * sd.to_parent;
                             let centre = to_world.transform_point3(sd.centre);
                             let eye_s = input.eye - centre;
-                            let in_small = |d: Vec3| {
-                                (sd.from_parent * (pp.from_parent * d)).normalize_or(Vec3::Y)
-                            };
-                            let mut s_sun = [1.0; 8];
-                            let mut s_sky = [1.0; 8];
-                            for k in 0..visibility::CORNERS {
-                                let q = sd.corners_in_parent[k];
-                                let own = if cube_sun {
-                                    let cube = hb::cube_of(
-                                        &plant.small_cubes,
-                                        plant.cube_resolution,
-                                        index,
-                                        k,
-                                    );
-                                    1.0 - visibility::lookup(
-                                        cube,
-                                        res,
-                                        sd.from_parent * (pp.from_parent * sun_model),
-                                    )
-                                } else {
-                                    1.0
-                                };
-                                // The three levels combined: 1 − Π(1 − opacity).
-                                s_sun[k] = own * trilinear(sun_vis, q);
-                                s_sky[k] = sd.sky[k] * trilinear(sky_vis, q);
-                            }
+                            let to_small = sd.from_parent * pp.from_parent;
+                            let in_small = |d: Vec3| (to_small * d).normalize_or(Vec3::Y);
+                            // The three levels combined.
+                            let (s_sun, s_sky) = sd.visibility(
+                                (sun_vis, sky_vis),
+                                |k| {
+                                    hb::cube_of(&plant.small_cubes, plant.cube_resolution, index, k)
+                                },
+                                res,
+                                cube_sun.then(|| in_object(sun_model)),
+                            );
                             let mut inst = billboard(
                                 &to_world,
                                 sd.set,
