@@ -119,6 +119,9 @@ pub struct FrameStats {
     pub trees_meshed: u32,
     /// Main branches drawn as their small branches (`hbt` with small branches), this frame.
     pub branches_opened: u32,
+    /// Main branches (and rests) of opened trees drawn as their meshes (`hbt` level 3, branch
+    /// by branch), this frame; trees drawn as meshes as a whole are not counted.
+    pub branches_meshed: u32,
 }
 
 struct Targets {
@@ -447,6 +450,7 @@ impl Renderer {
             trees_opened: h.trees_opened,
             trees_meshed: h.trees_meshed,
             branches_opened: h.branches_opened,
+            branches_meshed: h.branches_meshed,
             frame_ms,
             cpu_ms,
             timer: self.timer.kind(),

@@ -951,3 +951,212 @@ fn main_branches_open_into_their_small_branches() {
         "main branches → small branches changes the tree by {switch:.4}, more than the levels' own errors {e1:.4} / {e2:.4}"
     );
 }
+
+/// Each placement of the level below the tree gets its own branch's triangles of the plant's
+/// meshes (so an opened tree can draw it as polygons): every triangle once, each branch's as
+/// many as its instance expanded in place, and the parts in the baked placements' order.
+#[test]
+fn placements_own_their_branches_triangles() {
+    let fir = sylvan_plant::load(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../assets/plants/fir.lsys"
+    )))
+    .expect("fir.lsys");
+    let mut plants: Vec<sylvan_plant::Plant> = sylvan_plant::PRESETS
+        .iter()
+        .map(|n| sylvan_plant::preset(n).expect("preset"))
+        .collect();
+    plants.push(fir);
+    // Without an instancing hierarchy there is no level below to split by.
+    assert!(hbt::parts::placement_meshes(&common::test_tree(), 0).is_err());
+    for plant in &plants {
+        let level = hbt::bake::branch_level(plant, 16);
+        let split = hbt::parts::placement_meshes(plant, level.placements.len())
+            .unwrap_or_else(|e| panic!("{}: {e}", plant.name));
+        assert_eq!(split.parts.len(), level.placements.len(), "{}", plant.name);
+        for (mine, theirs) in [(&split.wood, &plant.wood), (&split.leaves, &plant.leaves)] {
+            assert_eq!(mine.positions, theirs.positions, "{}", plant.name);
+            // Triangles as sorted index triples: the same multiset.
+            let tris = |m: &sylvan_plant::Mesh| {
+                let mut t: Vec<[u32; 3]> = m
+                    .indices
+                    .chunks_exact(3)
+                    .map(|c| [c[0], c[1], c[2]])
+                    .collect();
+                t.sort_unstable();
+                t
+            };
+            assert_eq!(tris(mine), tris(theirs), "{}", plant.name);
+        }
+        // Consecutive ranges covering the buffers, the rest last.
+        let (mut w, mut l) = (0, 0);
+        for [pw, pl] in &split.parts {
+            assert_eq!((pw.start, pl.start), (w, l), "{}", plant.name);
+            (w, l) = (pw.end, pl.end);
+        }
+        assert_eq!(w as usize, plant.wood.indices.len(), "{}", plant.name);
+        assert_eq!(l as usize, plant.leaves.indices.len(), "{}", plant.name);
+        let rest = level.placements.last().expect("a rest");
+        assert_eq!(level.objects[rest.0 as usize].0, hbt::bake::REST_OBJECT);
+        let branches = split.parts.len() - 1;
+        let in_branches: usize = split.parts[..branches].iter().map(|p| p[1].len()).sum();
+        eprintln!(
+            "{}: {branches} branches hold {in_branches} of {} leaf indices, rest {} wood / {} leaf",
+            plant.name,
+            plant.leaves.indices.len(),
+            split.parts[branches][0].len(),
+            split.parts[branches][1].len(),
+        );
+        assert!(in_branches > 0, "{}", plant.name);
+    }
+}
+
+/// MNP01 §4 at the bottom of the hierarchy, branch by branch ([`HbtParams::mesh_per_branch`]):
+/// an opened tree draws each main branch as its meshes where that branch's own texels would be
+/// magnified. Lowering the threshold step by step meshes more branches, never fewer, from none
+/// to the whole tree, and each step changes the picture less than opening the whole tree into
+/// its meshes at once does (the point of opening by parts: no tree-wide pop).
+#[test]
+fn opened_trees_mesh_branch_by_branch() {
+    use sylvan_render::TechniqueKind::Hbt;
+    let gpu = gpu();
+    let plant = sylvan_plant::preset("pine").unwrap();
+    let p = HbtParams {
+        levels: 3,
+        view_level: 1,
+        light_level: 1,
+        shadow_resolution: 128,
+        band: 0.0,
+        // Opened at any distance: only the meshes' switch is under test.
+        open_texel_pixels: 0.1,
+        ..Default::default()
+    };
+    let baked = hbt::bake::bake(&gpu, &plant, &p, |_, _| {}).expect("bake");
+    let (size, fov) = (160u32, 40.0f32);
+    let ppm = size as f32 / (2.0 * (fov.to_radians() / 2.0).tan());
+    let height = 16.0;
+    let scale = height / plant.bbox_max[1];
+    // The tree 120 px tall.
+    let dist = height * ppm / 120.0;
+    let at = Vec3::new(60.0, 0.0, 60.0);
+    let trees = vec![TreeInstance {
+        position: at,
+        species: 0,
+        height,
+        rotation: 0.3,
+    }];
+    let camera = Camera {
+        position: Vec3::new(at.x, height * 0.5, at.z - dist),
+        look_at: Vec3::new(at.x, height * 0.5, at.z),
+        fov_deg: fov,
+    };
+    let scene = common::scene(
+        common::terrain(160.0, 33, |_, _| 0.0),
+        trees,
+        camera,
+        common::sun(150.0, 40.0),
+    );
+    let plants = vec![plant.clone()];
+    let dir = std::env::temp_dir().join(format!("sylvan-hbt-per-branch-{}", std::process::id()));
+    let render = |q: &HbtParams| {
+        let options = sylvan_render::RenderOptions {
+            width: size,
+            height: size,
+            technique: Hbt,
+            hbt: q.clone(),
+            cache: CachePolicy::Dir(dir.clone()),
+            ..Default::default()
+        };
+        let mut r =
+            sylvan_render::Renderer::new(&gpu, &scene, &plants, &options).expect("renderer");
+        let stats = r.render(&gpu, &scene.camera, &scene.sun).expect("frame");
+        let img =
+            image::DynamicImage::ImageRgba8(r.read_image(&gpu).expect("readback")).into_rgb8();
+        (img, stats.branches_meshed, stats.trees_meshed)
+    };
+    // Thresholds spanning the placements' texels at this distance, largest first.
+    let texels: Vec<f32> = (0..baked.placements.len())
+        .filter_map(|i| baked.placement_texel(i, false))
+        .collect();
+    let px = |t: f32| t * scale * ppm / dist;
+    let hi = px(texels.iter().copied().fold(0.0, f32::max)) * 1.6;
+    let lo = px(texels.iter().copied().fold(f32::INFINITY, f32::min)) * 0.6;
+    assert!(lo > 0.0 && hi > lo, "texel range {lo}..{hi}");
+    let steps = 7;
+    let branch = |t: f32| HbtParams {
+        mesh_per_branch: true,
+        mesh_texel_pixels: t.clamp(0.1, 16.0),
+        ..p.clone()
+    };
+    let mut shots = Vec::new();
+    for k in 0..steps {
+        let t = hi * (lo / hi).powf(k as f32 / (steps - 1) as f32);
+        shots.push((t, render(&branch(t))));
+    }
+    // Tree by tree: the whole tree switches at once between the same two ends.
+    let whole = |t: f32| HbtParams {
+        mesh_per_branch: false,
+        mesh_texel_pixels: t,
+        ..p.clone()
+    };
+    let (closed, _, m0) = render(&whole(hi));
+    let (meshed, _, m1) = render(&whole(lo));
+    std::fs::remove_dir_all(&dir).ok();
+    assert_eq!(
+        (m0, m1),
+        (0, 1),
+        "tree mode: closed at {hi:.3} px, meshed at {lo:.3} px"
+    );
+    let whole_switch = sylvan_eval::flip(&closed, &meshed).unwrap().mean;
+    let counts: Vec<(u32, u32)> = shots.iter().map(|s| (s.1.1, s.1.2)).collect();
+    eprintln!(
+        "per branch, thresholds {hi:.3} → {lo:.3} px: (branches meshed, trees meshed) {counts:?}; whole-tree switch FLIP {whole_switch:.4}"
+    );
+    assert_eq!(
+        counts[0],
+        (0, 0),
+        "nothing meshed above every branch's texel"
+    );
+    assert_eq!(
+        counts[steps - 1].1,
+        1,
+        "the tree meshed below every branch's texel"
+    );
+    assert!(
+        counts.iter().any(|&(b, _)| b > 0),
+        "some steps mesh part of the tree: {counts:?}"
+    );
+    // Fully meshed branch by branch draws what the whole tree's meshes draw.
+    let all = &shots[steps - 1].1.0;
+    let same = sylvan_eval::flip(&meshed, all).unwrap().mean;
+    assert!(
+        same < 0.005,
+        "all branches meshed vs the whole tree's meshes: FLIP {same:.4}"
+    );
+    let mut previous = 0;
+    for w in shots.windows(2) {
+        let (a, b) = (&w[0].1, &w[1].1);
+        // Meshed parts only grow as the threshold drops (a whole tree counts as all of them).
+        let parts = |s: &(image::RgbImage, u32, u32)| {
+            if s.2 > 0 && s.1 == 0 {
+                baked.placements.len() as u32
+            } else {
+                s.1
+            }
+        };
+        assert!(parts(b) >= parts(a) && parts(a) >= previous, "{counts:?}");
+        previous = parts(a);
+        let step = sylvan_eval::flip(&a.0, &b.0).unwrap().mean;
+        eprintln!(
+            "  {:.3} → {:.3} px: {} → {} parts meshed, FLIP {step:.4}",
+            w[0].0,
+            w[1].0,
+            parts(a),
+            parts(b)
+        );
+        assert!(
+            step < whole_switch,
+            "one step of the branch-by-branch opening ({step:.4}) must change the tree less than opening it whole ({whole_switch:.4})"
+        );
+    }
+}

@@ -241,6 +241,7 @@ impl AnyTechnique {
                 trees_opened: t.opened(),
                 trees_meshed: t.meshed(),
                 branches_opened: t.branches_opened(),
+                branches_meshed: t.branches_meshed(),
             },
             Self::Auto(c) => c.techniques.iter().map(AnyTechnique::hierarchy_stats).fold(
                 HierarchyStats::default(),
@@ -250,6 +251,7 @@ impl AnyTechnique {
                     trees_opened: a.trees_opened + b.trees_opened,
                     trees_meshed: a.trees_meshed + b.trees_meshed,
                     branches_opened: a.branches_opened + b.branches_opened,
+                    branches_meshed: a.branches_meshed + b.branches_meshed,
                 },
             ),
             _ => HierarchyStats::default(),
@@ -301,4 +303,6 @@ pub(crate) struct HierarchyStats {
     pub(crate) trees_meshed: u32,
     /// Main branches drawn as their small branches (fully or in transition), this frame.
     pub(crate) branches_opened: u32,
+    /// Placements of opened trees drawn as their meshes (fully or in transition), this frame.
+    pub(crate) branches_meshed: u32,
 }

@@ -104,6 +104,9 @@ pub struct BakeArgs {
     /// hbt (levels 3): a tree is drawn as its meshes when one texel of its largest main branch would cover more than this many pixels.
     #[arg(long, default_value_t = HbtParams::default().mesh_texel_pixels)]
     pub hbt_mesh_pixels: f32,
+    /// hbt (levels 3): open an opened tree into its meshes `branch` by branch (each main branch where its own texels would be magnified) or as a whole `tree` (by its largest main branch).
+    #[arg(long, default_value = "tree")]
+    pub hbt_mesh_by: String,
     /// hbt: cross-fade band around each level switch, relative to the switch (0 = hard switches).
     #[arg(long, default_value_t = HbtParams::default().band)]
     pub hbt_band: f32,
@@ -195,7 +198,13 @@ impl BakeArgs {
             "branches" => true,
             other => anyhow::bail!("--hbt-tree-from {other}: expected `geometry` or `branches`"),
         };
+        let mesh_per_branch = match self.hbt_mesh_by.as_str() {
+            "branch" => true,
+            "tree" => false,
+            other => anyhow::bail!("--hbt-mesh-by {other}: expected `branch` or `tree`"),
+        };
         let p = HbtParams {
+            mesh_per_branch,
             fixed_light,
             tree_from_branches,
             small_branches: self.hbt_small_branches,

@@ -66,6 +66,10 @@ pub struct Report {
     /// `hbt` with small branches: main branches drawn as their small branches (last frame).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub branches_opened: Option<u32>,
+    /// `hbt` level 3: main branches (and rests) of opened trees drawn as their meshes, branch
+    /// by branch (last frame).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub branches_meshed: Option<u32>,
     pub adapter: String,
     /// The camera path replayed (`bench --path`), as given.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -141,6 +145,7 @@ impl Report {
             trees_meshed: (last.visibility_bytes > 0 || last.trees_meshed > 0)
                 .then_some(last.trees_meshed),
             branches_opened: (last.branches_opened > 0).then_some(last.branches_opened),
+            branches_meshed: (last.branches_meshed > 0).then_some(last.branches_meshed),
             adapter,
             path: None,
             per_frame: None,

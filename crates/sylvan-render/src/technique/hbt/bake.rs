@@ -168,35 +168,38 @@ impl HbtBaked {
     /// level below, the tree's texel.
     pub fn mesh_texel(&self) -> f32 {
         let only_rest = self.objects.len() == 1;
+        (0..self.placements.len())
+            .filter_map(|i| self.placement_texel(i, only_rest))
+            .reduce(f32::max)
+            .unwrap_or_else(|| self.tree_texel())
+    }
+
+    /// Side of one texel of the lowest BTF level of placement `index`, in plant units: its
+    /// own, or where it opens into small branches their largest (its rest, as long as it, does
+    /// not count). `None` for the rest object unless `with_rest`.
+    pub fn placement_texel(&self, index: usize, with_rest: bool) -> Option<f32> {
         let texel = |o: &ObjectBtf, pl: &Placement| {
             (Vec3::from(o.bbox_max) - Vec3::from(o.bbox_min)).max_element()
                 * pl.affine().matrix3.x_axis.length()
                 / self.tile as f32
         };
-        self.placements
+        let pl = self.placements.get(index)?;
+        let o = self.objects.get(pl.object as usize)?;
+        if o.object == REST_OBJECT && !with_rest {
+            return None;
+        }
+        let small = self.small.range(pl.object as usize);
+        if small.is_empty() {
+            return Some(texel(o, pl));
+        }
+        let scale = pl.affine().matrix3.x_axis.length();
+        self.small.placements[small]
             .iter()
-            .filter_map(|pl| {
-                let o = &self.objects[pl.object as usize];
-                if o.object == REST_OBJECT && !only_rest {
-                    return None;
-                }
-                // A main branch that opens into small branches: their largest texel (its
-                // rest, as long as it, does not count either).
-                let small = self.small.range(pl.object as usize);
-                if small.is_empty() {
-                    return Some(texel(o, pl));
-                }
-                let scale = pl.affine().matrix3.x_axis.length();
-                self.small.placements[small]
-                    .iter()
-                    .filter_map(|sp| {
-                        let so = &self.small.objects[sp.object as usize];
-                        (so.object != REST_OBJECT).then(|| texel(so, sp) * scale)
-                    })
-                    .reduce(f32::max)
+            .filter_map(|sp| {
+                let so = &self.small.objects[sp.object as usize];
+                (so.object != REST_OBJECT).then(|| texel(so, sp) * scale)
             })
             .reduce(f32::max)
-            .unwrap_or_else(|| self.tree_texel())
     }
 
     /// Bytes of image data (all mips), tree level then the levels below.
@@ -1031,7 +1034,7 @@ pub struct BranchLevel {
 pub fn branch_level(plant: &Plant, max_objects: usize) -> BranchLevel {
     // Every branch instance of the root is cut off (deeper ones belong to them); the rest is
     // kept even alone (an imported mesh has nothing else).
-    let (children, rest) = split_object(plant, plant.instancing.root, &|_| true, "rest");
+    let (children, rest) = split_root(plant);
     let mut level = from_children(
         plant,
         &[Parent {
@@ -1044,6 +1047,12 @@ pub fn branch_level(plant: &Plant, max_objects: usize) -> BranchLevel {
     );
     level.ranges.clear();
     level
+}
+
+/// The plant's root split as [`branch_level`] splits it: every branch instance of the root
+/// (deeper ones belong to them) with its transform, and the rest.
+pub(super) fn split_root(plant: &Plant) -> (Vec<(u32, Mat4)>, Plant) {
+    split_object(plant, plant.instancing.root, &|_| true, "rest")
 }
 
 /// The common end of both levels: `parents` are, per object of the level above, the objects

@@ -163,6 +163,23 @@ struct PlacementDraw {
     /// Its object's small-branch placements (indices into [`PlantDraw::small`]; empty: it
     /// does not open).
     small: Range<usize>,
+    /// Texel side of its lowest BTF level per unit tree scale (its own, or its small
+    /// branches'): its meshes open when that would be magnified. `None` for the rest object,
+    /// whose meshes open with the first branch's.
+    mesh_texel: Option<f32>,
+}
+
+/// [`MeshDraw::part`] of a whole tree's meshes.
+const WHOLE: u32 = u32::MAX;
+
+/// One instanced draw of a plant's meshes: the whole tree or one placement's part.
+struct MeshDraw {
+    /// Index into [`Hbt::plants`].
+    plant: usize,
+    /// A placement index into [`PlantDraw::parts`], or [`WHOLE`].
+    part: u32,
+    /// Its records in the mesh instance buffer.
+    instances: Range<u32>,
 }
 
 /// A distinct baked plant, ready to draw.
@@ -180,8 +197,12 @@ struct PlantDraw {
     /// level below `open_texel_pixels` (the tree level is replaced where it would be magnified;
     /// the branches' earlier switch has no meaning for it).
     mesh_pixels: f32,
-    /// The plant's own meshes (MNP01 §4's polygonal bottom level; with `levels` = 3).
+    /// The plant's own meshes (MNP01 §4's polygonal bottom level; with `levels` = 3), indices
+    /// grouped by placement when `parts` is not empty.
     meshes: Option<SpeciesMeshes>,
+    /// Per placement, its ranges of the wood and leaf indices (empty: the tree opens into its
+    /// meshes as a whole, [`HbtParams::mesh_per_branch`] off or no parts found).
+    parts: Vec<[Range<u32>; 2]>,
     placements: Vec<PlacementDraw>,
     /// Index of its bake in `prepare`'s list (species with equal bakes share one entry).
     source: usize,
@@ -221,13 +242,18 @@ pub struct Hbt {
     staging: Vec<GpuHbtInstance>,
     sort: Vec<(f32, GpuHbtInstance)>,
     ranges: [Range<u32>; PASSES],
-    /// Trees drawn as meshes: their records (presence set), `mesh_ranges[pass][species]`.
+    /// Trees and placements drawn as meshes: their records (presence set), drawn by
+    /// `mesh_draws[pass]`.
     mesh_instances: Growable,
     mesh_staging: Vec<GpuTreeInstance>,
-    mesh_ranges: [Vec<Range<u32>>; PASSES],
+    mesh_sort: Vec<(u32, u32, GpuTreeInstance)>,
+    mesh_draws: [Vec<MeshDraw>; PASSES],
+    /// Per placement of the tree at hand, its share drawn as meshes.
+    part_mesh: Vec<f32>,
     opened: u32,
     meshed: u32,
     branches_opened: u32,
+    branches_meshed: u32,
 }
 
 impl Hbt {
@@ -251,6 +277,13 @@ impl Hbt {
     /// frame's camera pass.
     pub fn branches_opened(&self) -> u32 {
         self.branches_opened
+    }
+
+    /// Placements of opened trees (main branches and rests) drawn, fully or in transition, as
+    /// their meshes in the last frame's camera pass (not counting trees drawn as meshes as a
+    /// whole).
+    pub fn branches_meshed(&self) -> u32 {
+        self.branches_meshed
     }
 
     /// Bytes of the visibility structure: the scene's cube-maps (CPU) and the plants' branch
@@ -402,6 +435,38 @@ fn billboard(
     }
 }
 
+/// One shadow-caster record: seen from the sun only coverage matters, so the nearest of the
+/// view samples `views` (looked up from the sun, in the object's frame) alone — blending 3
+/// samples' differing silhouettes thins the crown's coverage, and with it its shadow (on the
+/// test grove, ground shadow coverage 0.070 blended vs 0.112 reference).
+fn caster(
+    to_world: &Affine3A,
+    set: u32,
+    views: ([u32; 3], [f32; 3]),
+    tint: f32,
+    presence: f32,
+    scale: f32,
+    radius: f32,
+) -> GpuHbtInstance {
+    let (v, vw) = views;
+    let best = (0..3).max_by(|&a, &b| vw[a].total_cmp(&vw[b])).unwrap_or(0);
+    let mut inst = billboard(
+        to_world,
+        set,
+        (v, vw),
+        ([0; 3], [1.0, 0.0, 0.0]),
+        0.0,
+        ([1.0; 8], [1.0; 8]),
+        tint,
+        presence,
+        scale,
+        radius,
+    );
+    inst.weights = [0.0; 12];
+    inst.weights[3 * best] = 1.0;
+    inst
+}
+
 impl Representation for Hbt {
     const NAME: &'static str = "hbt";
     const FORMAT_VERSION: u32 = hb::FORMAT_VERSION;
@@ -544,19 +609,34 @@ impl Representation for Hbt {
                         placed,
                         index,
                         small: b.small.range(pl.object as usize),
+                        mesh_texel: b.placement_texel(index, false),
                     });
                 }
             }
             let (texel, mesh_texel) = (b.tree_texel(), b.mesh_texel());
-            let meshes = match &mesh_pipes {
-                Some(pipes) => Some(SpeciesMeshes::new(
+            // Branch by branch: the plant's meshes with each placement's triangles together.
+            let split = match &mesh_pipes {
+                Some(_) if params.mesh_per_branch && !placements.is_empty() => {
+                    super::parts::placement_meshes(plant, placements.len()).ok()
+                }
+                _ => None,
+            };
+            let meshes = match (&mesh_pipes, &split) {
+                (Some(pipes), Some(split)) => Some(SpeciesMeshes::new(
+                    gpu,
+                    pipes,
+                    plant,
+                    &split.wood,
+                    &split.leaves,
+                )?),
+                (Some(pipes), None) => Some(SpeciesMeshes::new(
                     gpu,
                     pipes,
                     plant,
                     &plant.wood,
                     &plant.leaves,
                 )?),
-                None => None,
+                _ => None,
             };
             species_plant.push(plant_draws.len());
             plant_draws.push(PlantDraw {
@@ -572,6 +652,7 @@ impl Representation for Hbt {
                     params.mesh_texel_pixels
                 },
                 meshes,
+                parts: split.map_or_else(Vec::new, |s| s.parts),
                 placements,
                 source: index,
                 ambient: b.ambient.clone(),
@@ -665,7 +746,6 @@ impl Representation for Hbt {
                 .filter_map(|p| p.meshes.as_ref())
                 .map(SpeciesMeshes::bytes)
                 .sum::<u64>();
-        let species_count = species_plant.len();
         Ok(Self {
             params: params.clone(),
             views: DirectionLut::new(&views, DirectionLut::DEFAULT_RESOLUTION).map_err(option)?,
@@ -688,10 +768,13 @@ impl Representation for Hbt {
             ranges: std::array::from_fn(|_| 0..0),
             mesh_instances: Growable::new(gpu, "hbt_mesh_instances", 1 << 12),
             mesh_staging: Vec::new(),
-            mesh_ranges: std::array::from_fn(|_| vec![0..0; species_count]),
+            mesh_sort: Vec::new(),
+            mesh_draws: std::array::from_fn(|_| Vec::new()),
+            part_mesh: Vec::new(),
             opened: 0,
             meshed: 0,
             branches_opened: 0,
+            branches_meshed: 0,
         })
     }
 
@@ -701,6 +784,7 @@ impl Representation for Hbt {
         self.opened = 0;
         self.meshed = 0;
         self.branches_opened = 0;
+        self.branches_meshed = 0;
         let with_meshes = self.params.levels >= 3;
         let sun = input.sun_dir;
         let light = self
@@ -729,17 +813,24 @@ impl Representation for Hbt {
         let p = &self.params;
         let open_px = p.open_texel_pixels;
         let (lo_px, hi_px) = (open_px * (1.0 - p.band), open_px * (1.0 + p.band));
+        let ppm = input.pixels_per_metre;
+        let mut part_mesh = std::mem::take(&mut self.part_mesh);
         for pass in 0..PASSES {
             self.sort.clear();
+            self.mesh_sort.clear();
             for (s, &pi) in self.species_plant.iter().enumerate() {
                 let plant = &self.plants[pi];
                 let records = input.instances.records(pass, s);
                 let ids = input.instances.ids(pass, s);
-                let mesh_start = self.mesh_staging.len() as u32;
                 let (m_lo, m_hi) = (
                     plant.mesh_pixels * (1.0 - p.band),
                     plant.mesh_pixels * (1.0 + p.band),
                 );
+                let mesh_record = |part: u32, presence: f32, rec: &GpuTreeInstance| {
+                    let mut r = *rec;
+                    r.rot[3] = presence;
+                    (pi as u32, part, r)
+                };
                 for (rec, &id) in records.iter().zip(ids) {
                     let (c, sn, scale) = (rec.rot[0], rec.rot[1], rec.base_scale[3]);
                     let tree = PlacedTree::from_record(s, rec.base_scale, rec.rot);
@@ -748,61 +839,129 @@ impl Representation for Hbt {
                         .transform_point3((plant.min + plant.max) * 0.5);
                     let eye = input.eye - world_centre;
                     let dist = eye.length().max(1e-3);
-                    // MNP01 §4: the polygonal level opens when the level above it would be
-                    // magnified (decided from the camera in every pass, so a tree casts what
-                    // it shows).
-                    let mesh = if with_meshes && receives_in(pass, dist, plant.radius * scale) {
-                        let px = plant.mesh_texel * scale * input.pixels_per_metre / dist;
-                        smoothstep(m_lo, m_hi, px)
-                    } else {
-                        0.0
-                    };
-                    let mut presence = rec.rot[3];
-                    if mesh * presence > 0.002 {
-                        let mut r = *rec;
-                        r.rot[3] = mesh * presence;
-                        self.mesh_staging.push(r);
-                        if pass == 0 {
-                            self.meshed += 1;
-                            self.opened += 1;
-                        }
-                    }
-                    presence *= 1.0 - mesh;
-                    if presence <= 0.002 {
-                        continue;
-                    }
-                    if pass > 0 {
-                        // Shadow casters are seen from the sun: only coverage matters, so the
-                        // view weights go in the first column.
-                        let (v, vw) = self.views.lookup(to_model_dir(sun, c, sn));
-                        let mut inst = billboard(
-                            &tree.to_world,
-                            plant.tree_set,
-                            (v, vw),
-                            ([0; 3], [1.0, 0.0, 0.0]),
-                            0.0,
-                            ([1.0; 8], [1.0; 8]),
-                            rec.rot[2],
-                            presence,
-                            scale,
-                            plant.radius * scale,
-                        );
-                        // The nearest view sample alone: blending 3 samples' differing
-                        // silhouettes thins the crown's coverage, and with it its shadow (on the
-                        // test grove, ground shadow coverage 0.070 blended vs 0.112 reference).
-                        inst.weights = [0.0; 12];
-                        let best = (0..3).max_by(|&a, &b| vw[a].total_cmp(&vw[b])).unwrap_or(0);
-                        inst.weights[3 * best] = 1.0;
-                        self.sort.push((0.0, inst));
-                        continue;
-                    }
+                    let presence = rec.rot[3];
                     // MNP01 §4: open the tree when its texels would be magnified.
-                    let texel_px = plant.texel * scale * input.pixels_per_metre / dist;
+                    let texel_px = plant.texel * scale * ppm / dist;
                     let open = if plant.placements.is_empty() {
                         0.0
                     } else {
                         smoothstep(lo_px, hi_px, texel_px)
                     };
+                    // How the tree's presence is shared: its meshes as a whole, its tree
+                    // billboard, and its opened objects (each a mesh part and a billboard by
+                    // `part_mesh`). The polygonal level opens when the BTF level above it
+                    // would be magnified, decided from the camera in every pass so that a tree
+                    // casts what it shows; a pass casts meshes only into the cascades that
+                    // shade them.
+                    part_mesh.clear();
+                    let (mut whole, mut tree_bb, mut below) = (0.0, 0.0, 0.0);
+                    // Branch by branch, unless no branch could be near enough (its largest
+                    // texel at the tree's nearest point).
+                    let reach =
+                        plant.mesh_texel * scale * ppm / (dist - plant.radius * scale).max(1e-3);
+                    if with_meshes && !plant.parts.is_empty() && reach > m_lo {
+                        // Branch by branch: each placement by its own lowest BTF texel and
+                        // distance; the rest (trunk) with the first branch that opens.
+                        let mut most = 0.0f32;
+                        let mut least = 1.0f32;
+                        for pl in &plant.placements {
+                            let m = pl.mesh_texel.map(|t| {
+                                let pp = &pl.placed;
+                                let centre =
+                                    (tree.to_world * pp.to_parent).transform_point3(pp.centre);
+                                let d = (input.eye - centre).length().max(1e-3);
+                                let m = smoothstep(m_lo, m_hi, t * scale * ppm / d);
+                                most = most.max(m);
+                                if receives_in(pass, d, pp.radius * scale) {
+                                    m
+                                } else {
+                                    0.0
+                                }
+                            });
+                            part_mesh.push(m.unwrap_or(-1.0));
+                        }
+                        let rest = if receives_in(pass, dist, plant.radius * scale) {
+                            most
+                        } else {
+                            0.0
+                        };
+                        for m in part_mesh.iter_mut() {
+                            if *m < 0.0 {
+                                *m = rest;
+                            }
+                            least = least.min(*m);
+                        }
+                        let opened = open.max(most);
+                        if least * opened >= 0.998 {
+                            whole = presence;
+                        } else {
+                            tree_bb = (1.0 - opened) * presence;
+                            below = opened * presence;
+                        }
+                    } else {
+                        let mesh = if with_meshes && receives_in(pass, dist, plant.radius * scale) {
+                            smoothstep(m_lo, m_hi, plant.mesh_texel * scale * ppm / dist)
+                        } else {
+                            0.0
+                        };
+                        whole = mesh * presence;
+                        tree_bb = (1.0 - open) * (1.0 - mesh) * presence;
+                        below = open * (1.0 - mesh) * presence;
+                        part_mesh.resize(plant.placements.len(), 0.0);
+                    }
+                    // Trees opened into BTFs only cast at the tree level.
+                    if pass > 0 && !part_mesh.iter().any(|&m| m > 0.0) {
+                        tree_bb += below;
+                        below = 0.0;
+                    }
+                    if whole > 0.002 {
+                        self.mesh_sort.push(mesh_record(WHOLE, whole, rec));
+                    }
+                    if pass == 0 && (whole > 0.002 || below > 0.002) {
+                        self.opened += 1;
+                        if whole > 0.002 || part_mesh.iter().any(|&m| m * below > 0.002) {
+                            self.meshed += 1;
+                        }
+                    }
+                    if pass > 0 {
+                        if tree_bb > 0.002 {
+                            let inst = caster(
+                                &tree.to_world,
+                                plant.tree_set,
+                                self.views.lookup(to_model_dir(sun, c, sn)),
+                                rec.rot[2],
+                                tree_bb,
+                                scale,
+                                plant.radius * scale,
+                            );
+                            self.sort.push((0.0, inst));
+                        }
+                        if below > 0.002 {
+                            for (j, pl) in plant.placements.iter().enumerate() {
+                                let m = part_mesh[j] * below;
+                                if m > 0.002 {
+                                    self.mesh_sort.push(mesh_record(j as u32, m, rec));
+                                }
+                                if below - m <= 0.002 {
+                                    continue;
+                                }
+                                let pp = &pl.placed;
+                                let sun_object = (pp.from_parent * to_model_dir(sun, c, sn))
+                                    .normalize_or(Vec3::Y);
+                                let inst = caster(
+                                    &(tree.to_world * pp.to_parent),
+                                    pp.set,
+                                    self.branch_views.lookup(sun_object),
+                                    rec.rot[2],
+                                    below - m,
+                                    scale * pp.scale,
+                                    pp.radius * scale,
+                                );
+                                self.sort.push((0.0, inst));
+                            }
+                        }
+                        continue;
+                    }
                     let (mut tree_sun, tree_sky) = match &self.scene {
                         Some(sc) => (unit8(sc.sun(id as usize)), unit8(sc.sky(id as usize))),
                         None => ([1.0; 8], [1.0; 8]),
@@ -811,7 +970,7 @@ impl Representation for Hbt {
                         tree_sun = [1.0; 8];
                     }
                     let light_model = to_model_dir(light, c, sn);
-                    if (1.0 - open) * presence > 0.002 {
+                    if tree_bb > 0.002 {
                         // MNP01 §4.1: 3 view × 3 light samples, products of barycentrics.
                         let inst = billboard(
                             &tree.to_world,
@@ -821,21 +980,27 @@ impl Representation for Hbt {
                             p.min_weight,
                             (tree_sun, tree_sky),
                             rec.rot[2],
-                            (1.0 - open) * presence,
+                            tree_bb,
                             scale,
                             plant.radius * scale,
                         );
                         self.sort.push((eye.length_squared(), inst));
                     }
-                    if open * presence <= 0.002 {
+                    if below <= 0.002 {
                         continue;
-                    }
-                    if mesh * rec.rot[3] <= 0.002 {
-                        self.opened += 1;
                     }
                     let sun_model = to_model_dir(sun, c, sn);
                     let res = plant.cube_resolution as usize;
-                    for pl in &plant.placements {
+                    for (j, pl) in plant.placements.iter().enumerate() {
+                        let meshed = part_mesh[j] * below;
+                        if meshed > 0.002 {
+                            self.mesh_sort.push(mesh_record(j as u32, meshed, rec));
+                            self.branches_meshed += 1;
+                        }
+                        let here = below - meshed;
+                        if here <= 0.002 {
+                            continue;
+                        }
                         let pp = &pl.placed;
                         let to_world = tree.to_world * pp.to_parent;
                         let centre = to_world.transform_point3(pp.centre);
@@ -852,11 +1017,9 @@ impl Representation for Hbt {
                         let split = if pl.small.is_empty() {
                             0.0
                         } else {
-                            let px = pl.texel * scale * input.pixels_per_metre
-                                / eye_o.length().max(1e-3);
+                            let px = pl.texel * scale * ppm / eye_o.length().max(1e-3);
                             smoothstep(lo_px, hi_px, px)
                         };
-                        let here = open * presence;
                         if (1.0 - split) * here > 0.002 {
                             let mut inst = billboard(
                                 &to_world,
@@ -912,7 +1075,23 @@ impl Representation for Hbt {
                         }
                     }
                 }
-                self.mesh_ranges[pass][s] = mesh_start..self.mesh_staging.len() as u32;
+            }
+            // The meshes grouped by plant and part: one instanced draw per group.
+            self.mesh_sort.sort_by_key(|m| (m.0, m.1));
+            self.mesh_draws[pass].clear();
+            for (plant, part, rec) in self.mesh_sort.iter().copied() {
+                let at = self.mesh_staging.len() as u32;
+                self.mesh_staging.push(rec);
+                match self.mesh_draws[pass].last_mut() {
+                    Some(d) if d.plant == plant as usize && d.part == part => {
+                        d.instances.end = at + 1
+                    }
+                    _ => self.mesh_draws[pass].push(MeshDraw {
+                        plant: plant as usize,
+                        part,
+                        instances: at..at + 1,
+                    }),
+                }
             }
             if pass == 0 {
                 // MNP01 §5: back to front (trees and the objects of opened trees together).
@@ -922,6 +1101,7 @@ impl Representation for Hbt {
             self.staging.extend(self.sort.iter().map(|x| x.1));
             self.ranges[pass] = start..self.staging.len() as u32;
         }
+        self.part_mesh = part_mesh;
         self.mesh_instances
             .write(gpu, bytemuck::cast_slice(&self.mesh_staging))?;
         self.instances
@@ -953,28 +1133,30 @@ impl Hbt {
         let mut counts = DrawCounts::default();
         if let Some(pipes) = &self.mesh_pipes {
             let (wood, leaf) = pipes.for_pass(shadow);
-            for (pipeline, is_wood) in [(wood, true), (leaf, false)] {
+            for (pipeline, kind) in [(wood, 0), (leaf, 1)] {
                 pass.set_pipeline(pipeline);
-                for (s, &pi) in self.species_plant.iter().enumerate() {
-                    let Some(meshes) = &self.plants[pi].meshes else {
+                for d in &self.mesh_draws[ctx.pass] {
+                    let plant = &self.plants[d.plant];
+                    let Some(meshes) = &plant.meshes else {
                         continue;
                     };
-                    let mesh = if is_wood {
+                    let Some(mesh) = (if kind == 0 {
                         &meshes.wood
                     } else {
                         &meshes.leaves
-                    };
-                    let Some(mesh) = mesh else { continue };
-                    let inst = self.mesh_ranges[ctx.pass][s].clone();
-                    if inst.is_empty() {
+                    }) else {
                         continue;
-                    }
+                    };
+                    let indices = match plant.parts.get(d.part as usize) {
+                        Some(part) => part[kind].clone(),
+                        None => 0..mesh.index_count,
+                    };
                     pass.set_bind_group(1, &meshes.material, &[]);
                     counts += mesh.draw_range(
                         pass,
-                        0..mesh.index_count,
+                        indices,
                         &self.mesh_instances.buffer,
-                        inst,
+                        d.instances.clone(),
                     );
                 }
             }

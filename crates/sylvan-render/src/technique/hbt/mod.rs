@@ -123,6 +123,7 @@
 pub mod bake;
 mod compose;
 mod draw;
+pub mod parts;
 pub mod scene;
 pub mod visibility;
 
@@ -214,6 +215,12 @@ pub struct HbtParams {
     /// main branch would cover more than this many pixels (a plant without a level below: when
     /// its tree texel would cover more than [`HbtParams::open_texel_pixels`]).
     pub mesh_texel_pixels: f32,
+    /// Draw only (`levels` = 3): an opened tree draws each placement of the level below (main
+    /// branch or rest) as its meshes where that placement's own lowest BTF texel would cover
+    /// more than [`HbtParams::mesh_texel_pixels`] (MNP01 §4: opened objects are "either
+    /// polygonal meshes or BTF"); off, the tree opens into its meshes as a whole, by its
+    /// largest main branch's texel.
+    pub mesh_per_branch: bool,
     /// Draw only: the cross-fade band around those switches, relative (0 = hard switch).
     pub band: f32,
     /// With `levels` ≥ 2: bake the tree level by rendering the level below with the runtime
@@ -264,6 +271,9 @@ impl Default for HbtParams {
             // closer than boxtree only at 0.35. The pine's branch level is then drawn only
             // within its cross-fades (BENCHMARKS.md).
             mesh_texel_pixels: 0.35,
+            // Measured on the default view at 1280×720: branch by branch 1.4× slower at the
+            // same ꟻLIP (more branch BTF fill and draws; BENCHMARKS.md).
+            mesh_per_branch: false,
             band: 0.3,
             tree_from_branches: false,
             small_branches: false,
