@@ -1000,8 +1000,12 @@ fn placements_own_their_branches_triangles() {
         assert_eq!(level.objects[rest.0 as usize].0, hbt::bake::REST_OBJECT);
         let branches = split.parts.len() - 1;
         let in_branches: usize = split.parts[..branches].iter().map(|p| p[1].len()).sum();
+        let small = split.parts[..branches]
+            .iter()
+            .filter(|p| (p[0].len() + p[1].len()) / 3 < 64)
+            .count();
         eprintln!(
-            "{}: {branches} branches hold {in_branches} of {} leaf indices, rest {} wood / {} leaf",
+            "{}: {branches} branches ({small} under 64 triangles) hold {in_branches} of {} leaf indices, rest {} wood / {} leaf",
             plant.name,
             plant.leaves.indices.len(),
             split.parts[branches][0].len(),
@@ -1018,9 +1022,21 @@ fn placements_own_their_branches_triangles() {
 /// its meshes at once does (the point of opening by parts: no tree-wide pop).
 #[test]
 fn opened_trees_mesh_branch_by_branch() {
-    use sylvan_render::TechniqueKind::Hbt;
     let gpu = gpu();
-    let plant = sylvan_plant::preset("pine").unwrap();
+    let fir = sylvan_plant::load(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../assets/plants/fir.lsys"
+    )))
+    .expect("fir.lsys");
+    // The pine's main branches are mostly a few leaf cards, which open with its first branch
+    // (the small-part rule); the fir's are boughs, which open one by one.
+    for plant in [sylvan_plant::preset("pine").unwrap(), fir] {
+        meshes_branch_by_branch(&gpu, &plant);
+    }
+}
+
+fn meshes_branch_by_branch(gpu: &sylvan_gpu::Gpu, plant: &sylvan_plant::Plant) {
+    use sylvan_render::TechniqueKind::Hbt;
     let p = HbtParams {
         levels: 3,
         view_level: 1,
@@ -1031,7 +1047,7 @@ fn opened_trees_mesh_branch_by_branch() {
         open_texel_pixels: 0.1,
         ..Default::default()
     };
-    let baked = hbt::bake::bake(&gpu, &plant, &p, |_, _| {}).expect("bake");
+    let baked = hbt::bake::bake(gpu, plant, &p, |_, _| {}).expect("bake");
     let (size, fov) = (160u32, 40.0f32);
     let ppm = size as f32 / (2.0 * (fov.to_radians() / 2.0).tan());
     let height = 16.0;
@@ -1057,7 +1073,11 @@ fn opened_trees_mesh_branch_by_branch() {
         common::sun(150.0, 40.0),
     );
     let plants = vec![plant.clone()];
-    let dir = std::env::temp_dir().join(format!("sylvan-hbt-per-branch-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!(
+        "sylvan-hbt-per-branch-{}-{}",
+        plant.name,
+        std::process::id()
+    ));
     let render = |q: &HbtParams| {
         let options = sylvan_render::RenderOptions {
             width: size,
@@ -1067,11 +1087,9 @@ fn opened_trees_mesh_branch_by_branch() {
             cache: CachePolicy::Dir(dir.clone()),
             ..Default::default()
         };
-        let mut r =
-            sylvan_render::Renderer::new(&gpu, &scene, &plants, &options).expect("renderer");
-        let stats = r.render(&gpu, &scene.camera, &scene.sun).expect("frame");
-        let img =
-            image::DynamicImage::ImageRgba8(r.read_image(&gpu).expect("readback")).into_rgb8();
+        let mut r = sylvan_render::Renderer::new(gpu, &scene, &plants, &options).expect("renderer");
+        let stats = r.render(gpu, &scene.camera, &scene.sun).expect("frame");
+        let img = image::DynamicImage::ImageRgba8(r.read_image(gpu).expect("readback")).into_rgb8();
         (img, stats.branches_meshed, stats.trees_meshed)
     };
     // Thresholds spanning the placements' texels at this distance, largest first.
@@ -1110,7 +1128,8 @@ fn opened_trees_mesh_branch_by_branch() {
     let whole_switch = sylvan_eval::flip(&closed, &meshed).unwrap().mean;
     let counts: Vec<(u32, u32)> = shots.iter().map(|s| (s.1.1, s.1.2)).collect();
     eprintln!(
-        "per branch, thresholds {hi:.3} → {lo:.3} px: (branches meshed, trees meshed) {counts:?}; whole-tree switch FLIP {whole_switch:.4}"
+        "{}, per branch, thresholds {hi:.3} → {lo:.3} px: (branches meshed, trees meshed) {counts:?}; whole-tree switch FLIP {whole_switch:.4}",
+        plant.name
     );
     assert_eq!(
         counts[0],

@@ -164,10 +164,18 @@ struct PlacementDraw {
     /// does not open).
     small: Range<usize>,
     /// Texel side of its lowest BTF level per unit tree scale (its own, or its small
-    /// branches'): its meshes open when that would be magnified. `None` for the rest object,
-    /// whose meshes open with the first branch's.
+    /// branches'): its meshes open when that would be magnified. `None` for the rest object
+    /// and small parts ([`SMALL_PART_TRIANGLES`]), whose meshes open with the first branch's.
     mesh_texel: Option<f32>,
 }
+
+/// With [`HbtParams::mesh_per_branch`], a placement whose meshes have fewer triangles than
+/// this opens into them with the rest (the first branch to open), not by its own texel: a
+/// bracket of a few leaf cards costs more as a billboard than as its triangles. Measured on the
+/// default view at 1280×720 (87 of the pine's 117 placements; every one of the prunus's and
+/// the bush's, which then keep their own texels): ꟻLIP 0.0446 against 0.0488, frame
+/// 1480 ms against 1716 ms (BENCHMARKS.md).
+const SMALL_PART_TRIANGLES: usize = 64;
 
 /// [`MeshDraw::part`] of a whole tree's meshes.
 const WHOLE: u32 = u32::MAX;
@@ -621,6 +629,22 @@ impl Representation for Hbt {
                 }
                 _ => None,
             };
+            // Parts of fewer than SMALL_PART_TRIANGLES triangles mesh with the rest (unless
+            // that leaves no branch to open by).
+            if let Some(split) = &split {
+                let small = |part: &[Range<u32>; 2]| {
+                    (part[0].len() + part[1].len()) / 3 < SMALL_PART_TRIANGLES
+                };
+                let any_large = placements
+                    .iter()
+                    .zip(&split.parts)
+                    .any(|(pl, part)| pl.mesh_texel.is_some() && !small(part));
+                for (pl, part) in placements.iter_mut().zip(&split.parts) {
+                    if any_large && small(part) {
+                        pl.mesh_texel = None;
+                    }
+                }
+            }
             let meshes = match (&mesh_pipes, &split) {
                 (Some(pipes), Some(split)) => Some(SpeciesMeshes::new(
                     gpu,

@@ -33,8 +33,11 @@
 //!   would cover more than [`HbtParams::open_texel_pixels`] pixels, and into its meshes when
 //!   one texel of its largest main branch would cover more than
 //!   [`HbtParams::mesh_texel_pixels`], each cross-faded over [`HbtParams::band`] (billboards
-//!   by optical depth, meshes by per-leaf presence); §5 the meshes first (opaque), then every
-//!   billboard (trees and opened trees' objects) back to front in one instanced draw;
+//!   by optical depth, meshes by per-leaf presence); or, with [`HbtParams::mesh_per_branch`]
+//!   (MNP01's opened objects "either polygonal meshes or BTF"), each main branch of an opened
+//!   tree into its own meshes where its own lowest texel would be, the plant's meshes split by
+//!   placement ([`parts`]); §5 the meshes first (opaque), then every billboard (trees and
+//!   opened trees' objects) back to front in one instanced draw;
 //! - §4.1 and the appendix, **reconstruction**: per billboard and frame, the 3 view samples and
 //!   3 light samples enclosing the (object-space) eye and sun directions with their barycentric
 //!   weights (MNP01's precomputed table, [`crate::directions::DirectionLut::lookup`], on the
@@ -72,8 +75,16 @@
 //!   slower (overlapping billboards, 12 fetches per fragment) and further from the reference
 //!   than the meshes (ꟻLIP 0.094 with the BTF levels only, 0.044 with meshes; BENCHMARKS.md).
 //!   With the pine the branch level is then drawn only within the cross-fades (the prunus,
-//!   whose branches are smaller against the tree, keeps a band of its own). A tree opens into
-//!   its meshes as a whole, not branch by branch.
+//!   whose branches are smaller against the tree, keeps a band of its own).
+//! - **A tree opens into its meshes as a whole by default.** Branch by branch
+//!   ([`HbtParams::mesh_per_branch`], `--hbt-mesh-by branch`) is built: each triangle of the
+//!   plant's own meshes is given to the root instance whose expansion has a triangle with the
+//!   same centroid ([`parts`]), so each main branch draws its own polygons (not its
+//!   representative's); the rest (trunk) and parts under 64 triangles open with the tree's
+//!   first branch. Measured on the default view at 1280×720 it is slower for the same ꟻLIP —
+//!   the presets' trees are 2.5–8k triangles, so the branches it keeps as BTFs cost more fill
+//!   than their triangles would, and each (plant, part) is a draw (BENCHMARKS.md, "hbt meshes
+//!   branch by branch") — so it is off; it is meant for trees of 10⁵ polygons.
 //! - **Representatives are turned**: a group member is drawn with its representative scaled by
 //!   the ratio of their diagonals and turned about its base so that its centroid points where
 //!   the member's does (objects that differ only by the turn at their bracket — a bough left or
@@ -99,7 +110,8 @@
 //!   stochastic (screen-door) alpha from the tree-level coverage of the view sample nearest the
 //!   sun; trees opened into branches cast at the tree level; trees drawn as meshes cast as
 //!   meshes into the cascades that shade their own leaves (by eye distance), elsewhere from
-//!   their tree BTF.
+//!   their tree BTF; a tree meshed in part casts those parts as meshes there and its other
+//!   branches as branch billboards.
 //! - **Self-shadowing** uses depth maps with PCF rather than MNP01's ray tracer (§6.1).
 //! - **Ambient occlusion inside an object** is the reference's crown-position estimate
 //!   (`crown_occlusion` in `frame.wgsl`) evaluated at each baked sample (in the object's own
@@ -271,7 +283,7 @@ impl Default for HbtParams {
             // closer than boxtree only at 0.35. The pine's branch level is then drawn only
             // within its cross-fades (BENCHMARKS.md).
             mesh_texel_pixels: 0.35,
-            // Measured on the default view at 1280×720: branch by branch 1.4× slower at the
+            // Measured on the default view at 1280×720: branch by branch 1.2× slower at the
             // same ꟻLIP (more branch BTF fill and draws; BENCHMARKS.md).
             mesh_per_branch: false,
             band: 0.3,
