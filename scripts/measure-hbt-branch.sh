@@ -54,10 +54,7 @@ echo "| distance m | height px | geometry 1 spp | hbt by tree | hbt by branch | 
 echo "|---|---|---|---|---|---|---|"
 SCENE=assets/scenes/eval/one-fir.toml
 for d in 60 120 180; do
-  z=$(python3 -c "print('%.1f' % (1100-$d))")
-  common=(--size 480x480 --camera "1100,6.5,$z:1100,6.5,1100")
-  h=$(python3 -c "import math; print(int(13*480/(2*math.tan(math.radians(20)))/$d))")
-  crop=(--crop "$(python3 -c "h=min($h,470); w=int(0.8*h); print(f'{240-w//2},{max(240-h//2-4,0)},{w},{min(h+8,480)}')")")
+  fir_view "$d"
   $S render $SCENE "${common[@]}" --spp 16 --out "$OUT/fir-$d-ref.png" 2>>"$OUT/log.txt"
   $S render $SCENE "${common[@]}" --out "$OUT/fir-$d-geometry.png" 2>>"$OUT/log.txt"
   row="| $d | $h | $(flip "$OUT/fir-$d-ref.png" "$OUT/fir-$d-geometry.png" "${crop[@]}") |"

@@ -628,6 +628,29 @@ fn a_tree_in_another_trees_shadow_darkens_as_in_the_reference() {
     );
 }
 
+/// One tree of `plant`, `height` m tall, seen from `dist` m at mid-height through a camera
+/// of vertical field `fov` (degrees), on flat ground lit from azimuth 150°, elevation 40°.
+fn one_tree_scene(height: f32, dist: f32, fov: f32) -> sylvan_scene::Scene {
+    let at = Vec3::new(60.0, 0.0, 60.0);
+    let trees = vec![TreeInstance {
+        position: at,
+        species: 0,
+        height,
+        rotation: 0.3,
+    }];
+    let camera = Camera {
+        position: Vec3::new(at.x, height * 0.5, at.z - dist),
+        look_at: Vec3::new(at.x, height * 0.5, at.z),
+        fov_deg: fov,
+    };
+    common::scene(
+        common::terrain(160.0, 33, |_, _| 0.0),
+        trees,
+        camera,
+        common::sun(150.0, 40.0),
+    )
+}
+
 /// Renders one `plant` (16 m tall) at the distance where `texel` (plant units) covers `pixels`
 /// pixels, just outside the switch (`closed`, `pixels` × 1.05) and just inside it (`opened`,
 /// × 0.95), and returns ꟻLIP (closed vs opened, reference vs closed, reference vs opened)
@@ -647,25 +670,8 @@ fn at_the_switch(
     let height = 16.0;
     let texel_m = texel * height / plant.bbox_max[1];
     let dist = texel_m * ppm / pixels;
-    let at = Vec3::new(60.0, 0.0, 60.0);
-    let trees = vec![TreeInstance {
-        position: at,
-        species: 0,
-        height,
-        rotation: 0.3,
-    }];
     // Far enough to see the whole tree: the near switch crops it from the top.
-    let camera = Camera {
-        position: Vec3::new(at.x, height * 0.5, at.z - dist),
-        look_at: Vec3::new(at.x, height * 0.5, at.z),
-        fov_deg: fov,
-    };
-    let scene = common::scene(
-        common::terrain(160.0, 33, |_, _| 0.0),
-        trees,
-        camera,
-        common::sun(150.0, 40.0),
-    );
+    let scene = one_tree_scene(height, dist, fov);
     let plants = vec![plant.clone()];
     // One bake for the three renders.
     let dir = std::env::temp_dir().join(format!("sylvan-hbt-switch-{what}-{}", std::process::id()));
@@ -1054,24 +1060,7 @@ fn meshes_branch_by_branch(gpu: &sylvan_gpu::Gpu, plant: &sylvan_plant::Plant) {
     let scale = height / plant.bbox_max[1];
     // The tree 120 px tall.
     let dist = height * ppm / 120.0;
-    let at = Vec3::new(60.0, 0.0, 60.0);
-    let trees = vec![TreeInstance {
-        position: at,
-        species: 0,
-        height,
-        rotation: 0.3,
-    }];
-    let camera = Camera {
-        position: Vec3::new(at.x, height * 0.5, at.z - dist),
-        look_at: Vec3::new(at.x, height * 0.5, at.z),
-        fov_deg: fov,
-    };
-    let scene = common::scene(
-        common::terrain(160.0, 33, |_, _| 0.0),
-        trees,
-        camera,
-        common::sun(150.0, 40.0),
-    );
+    let scene = one_tree_scene(height, dist, fov);
     let plants = vec![plant.clone()];
     let dir = std::env::temp_dir().join(format!(
         "sylvan-hbt-per-branch-{}-{}",

@@ -645,22 +645,12 @@ impl Representation for Hbt {
                     }
                 }
             }
-            let meshes = match (&mesh_pipes, &split) {
-                (Some(pipes), Some(split)) => Some(SpeciesMeshes::new(
-                    gpu,
-                    pipes,
-                    plant,
-                    &split.wood,
-                    &split.leaves,
-                )?),
-                (Some(pipes), None) => Some(SpeciesMeshes::new(
-                    gpu,
-                    pipes,
-                    plant,
-                    &plant.wood,
-                    &plant.leaves,
-                )?),
-                _ => None,
+            let (wood, leaves) = split
+                .as_ref()
+                .map_or((&plant.wood, &plant.leaves), |s| (&s.wood, &s.leaves));
+            let meshes = match &mesh_pipes {
+                Some(pipes) => Some(SpeciesMeshes::new(gpu, pipes, plant, wood, leaves)?),
+                None => None,
             };
             species_plant.push(plant_draws.len());
             plant_draws.push(PlantDraw {
