@@ -18,7 +18,7 @@ echo "| preset | tile | planes | boxes | images | image MB | bake ms |"
 echo "|---|---|---|---|---|---|---|"
 for preset in pine prunus bush; do
   for tile in 64 128; do
-    j=$($S bake --preset $preset --tile $tile --no-cache --json)
+    j=$($S bake --preset $preset --set boxtree.tile=$tile --no-cache --json)
     echo "| $preset | $tile | $(echo "$j" | field '["planes"]') | $(echo "$j" | field '["boxes"]') | $(echo "$j" | field '["images"]') | $(echo "$j" | python3 -c 'import json,sys; print("%.2f" % (json.load(sys.stdin)["image_bytes"]/1e6))') | $(echo "$j" | python3 -c 'import json,sys; print("%.0f" % json.load(sys.stdin)["bake_ms"])') |"
   done
 done
@@ -39,9 +39,9 @@ for h in 400 200 100 50; do
   common=(--size 640x480 --camera "$cam")
   $S render $SCENE "${common[@]}" --spp 16 --out "$OUT/tree-$h-ref.png" 2>>"$OUT/log.txt"
   $S render $SCENE "${common[@]}" --out "$OUT/tree-$h-geometry.png" 2>>"$OUT/log.txt"
-  $S render $SCENE "${common[@]}" --technique boxtree --planes diagonal --out "$OUT/tree-$h-diagonal.png" 2>>"$OUT/log.txt"
-  $S render $SCENE "${common[@]}" --technique boxtree --planes axis --out "$OUT/tree-$h-axis.png" 2>>"$OUT/log.txt"
-  $S render $SCENE "${common[@]}" --technique boxtree --planes billboard --tile "$bb_tile" --max-boxes 1 --texel-pixels 64 --out "$OUT/tree-$h-billboard.png" 2>>"$OUT/log.txt"
+  $S render $SCENE "${common[@]}" --technique boxtree --set boxtree.layout=diagonal --out "$OUT/tree-$h-diagonal.png" 2>>"$OUT/log.txt"
+  $S render $SCENE "${common[@]}" --technique boxtree --set boxtree.layout=axis --out "$OUT/tree-$h-axis.png" 2>>"$OUT/log.txt"
+  $S render $SCENE "${common[@]}" --technique boxtree --set boxtree.layout=billboard --set boxtree.tile="$bb_tile" --set boxtree.max_boxes=1 --set boxtree.texel_pixels=64 --out "$OUT/tree-$h-billboard.png" 2>>"$OUT/log.txt"
   r="$OUT/tree-$h-ref.png"
   # FLIP over a square of 1.3 × the tree's apparent height around it (clipped to the frame).
   crop=(--crop "$(python3 -c "h=$h; s=int(1.3*h); print(f'{max(320-s//2,0)},{max(240-s//2,0)},{s},{s}')")")
@@ -55,8 +55,8 @@ echo "|---|---|---|---|---|"
 for size in 480x270 1280x720; do
   $S render --size $size --spp 16 --out "$OUT/default-$size-ref.png" 2>>"$OUT/log.txt"
   $S render --size $size --out "$OUT/default-$size-geometry.png" 2>>"$OUT/log.txt"
-  $S render --size $size --technique boxtree --planes diagonal --out "$OUT/default-$size-diagonal.png" 2>>"$OUT/log.txt"
-  $S render --size $size --technique boxtree --planes axis --out "$OUT/default-$size-axis.png" 2>>"$OUT/log.txt"
+  $S render --size $size --technique boxtree --set boxtree.layout=diagonal --out "$OUT/default-$size-diagonal.png" 2>>"$OUT/log.txt"
+  $S render --size $size --technique boxtree --set boxtree.layout=axis --out "$OUT/default-$size-axis.png" 2>>"$OUT/log.txt"
   r="$OUT/default-$size-ref.png"
   g=$(flip $r "$OUT/default-$size-geometry.png")
   echo "| $size | $g | $(flip $r "$OUT/default-$size-diagonal.png") | $(flip $r "$OUT/default-$size-axis.png") | $(python3 -c "print('%.4f' % (1.25*$g))") |"
@@ -71,7 +71,7 @@ for size in 480x270 1280x720; do
   for round in 1 2; do
     for t in geometry boxtree boxtree-diagonal; do
       case $t in
-        boxtree-diagonal) args=(--technique boxtree --planes diagonal) ;;
+        boxtree-diagonal) args=(--technique boxtree --set boxtree.layout=diagonal) ;;
         *) args=(--technique $t) ;;
       esac
       $S bench --size $size "${args[@]}" --frames 5 --json > "$OUT/bench-$size-$t-$round.json"

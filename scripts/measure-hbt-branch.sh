@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Reproduces the "hbt meshes branch by branch" figures in BENCHMARKS.md (MNP01 §4, issue #5):
 # the default scene at 1280x720, FLIP vs geometry --spp 16 and bench medians (same run,
-# alternating, twice) for hbt opening trees into their meshes as a whole (`--hbt-mesh-by tree`,
+# alternating, twice) for hbt opening trees into their meshes as a whole (`--set hbt.mesh_per_branch=false`,
 # the default) and branch by branch, at two mesh thresholds; and one fir seen at 3 distances.
 # Needs scripts/measure-boxtree.sh's reference (out/measure-boxtree/default-1280x720-ref.png);
 # renders it when missing.
@@ -22,7 +22,7 @@ echo "| meshes by | mesh threshold px | FLIP | median ms (2 rounds) | cpu ms | c
 echo "|---|---|---|---|---|---|---|---|---|---|"
 for cfg in "${configs[@]}"; do
   set -- $cfg
-  $S render --size 1280x720 --technique hbt --hbt-mesh-by $1 --hbt-mesh-pixels $2 --out "$OUT/default-$1-$2.png" 2>>"$OUT/log.txt"
+  $S render --size 1280x720 --technique hbt --set hbt.mesh_per_branch=$([ $1 = branch ] && echo true || echo false) --set hbt.mesh_texel_pixels=$2 --out "$OUT/default-$1-$2.png" 2>>"$OUT/log.txt"
 done
 for round in 1 2; do
   for cfg in geometry "${configs[@]}"; do
@@ -31,7 +31,7 @@ for round in 1 2; do
       [ $round = 1 ] && $S bench --size 1280x720 --frames 5 --json > "$OUT/bench-geometry.json"
       continue
     fi
-    $S bench --size 1280x720 --technique hbt --hbt-mesh-by $1 --hbt-mesh-pixels $2 --frames 5 --json > "$OUT/bench-$1-$2-$round.json"
+    $S bench --size 1280x720 --technique hbt --set hbt.mesh_per_branch=$([ $1 = branch ] && echo true || echo false) --set hbt.mesh_texel_pixels=$2 --frames 5 --json > "$OUT/bench-$1-$2-$round.json"
   done
 done
 for cfg in "${configs[@]}"; do
@@ -44,7 +44,7 @@ runs = [json.load(open(f"{out}/bench-{by}-{px}-{r}.json")) for r in (1, 2)]
 geo = json.load(open(f"{out}/bench-geometry.json"))["frame_ms"]["median"]
 d = runs[0]
 med = [r["frame_ms"]["median"] for r in runs]
-print(f"| {by} | {px} | {f} | {med[0]:.0f} / {med[1]:.0f} ({geo / statistics.mean(med):.1f}× geometry) | {d['cpu_ms']['median']:.1f} | {d['triangles']} | {d['shadow_triangles']} | {d['draw_calls']} | {d.get('trees_meshed', 0)} | {d.get('branches_meshed', 0)} |")
+print(f"| {by} | {px} | {f} | {med[0]:.0f} / {med[1]:.0f} ({geo / statistics.mean(med):.1f}× geometry) | {d['cpu_ms']['median']:.1f} | {d['triangles']} | {d['shadow_triangles']} | {d['draw_calls']} | {d.get('hbt', {}).get('trees_meshed', 0)} | {d.get('hbt', {}).get('branches_meshed', 0)} |")
 PY
 done
 
@@ -59,9 +59,9 @@ for d in 60 120 180; do
   $S render $SCENE "${common[@]}" --out "$OUT/fir-$d-geometry.png" 2>>"$OUT/log.txt"
   row="| $d | $h | $(flip "$OUT/fir-$d-ref.png" "$OUT/fir-$d-geometry.png" "${crop[@]}") |"
   for by in tree branch; do
-    $S render $SCENE "${common[@]}" --technique hbt --hbt-mesh-by $by --out "$OUT/fir-$d-$by.png" --stats "$OUT/fir-$d-$by.json" 2>>"$OUT/log.txt"
+    $S render $SCENE "${common[@]}" --technique hbt --set hbt.mesh_per_branch=$([ $by = branch ] && echo true || echo false) --out "$OUT/fir-$d-$by.png" --stats "$OUT/fir-$d-$by.json" 2>>"$OUT/log.txt"
     row="$row $(flip "$OUT/fir-$d-ref.png" "$OUT/fir-$d-$by.png" "${crop[@]}") |"
   done
-  stat() { python3 -c "import json; print(json.load(open('$1')).get('$2') or 0)"; }
+  stat() { python3 -c "import json; print(json.load(open('$1')).get('hbt', {}).get('$2') or 0)"; }
   echo "$row $(stat "$OUT/fir-$d-tree.json" trees_meshed) | $(stat "$OUT/fir-$d-branch.json" branches_meshed) |"
 done

@@ -20,7 +20,7 @@ echo "## Bake (sylvan bake --technique hbt --no-cache --json)"
 echo "| plant | levels | main objects / placements | small objects / placements | tree BTF MB | lower BTFs MB | cube-maps MB | bake ms |"
 echo "|---|---|---|---|---|---|---|---|"
 for src in "$FIR" --preset=pine --preset=prunus --preset=bush; do
-  for small in "" --hbt-small-branches; do
+  for small in "" --set hbt.small_branches=true; do
     j=$($S bake $src --technique hbt --no-cache --json $small)
     levels="tree, main"; [ -n "$small" ] && levels="tree, main, small"
     echo "| ${src#--preset=} | $levels | $(echo "$j" | js 'd["branch_objects"], "/", d["branch_placements"]' | tr -d "(),'") | $(echo "$j" | js 'd["small_objects"], "/", d["small_placements"]' | tr -d "(),'") | $(echo "$j" | js '"%.1f" % (d["tree_bytes"]/1e6)') | $(echo "$j" | js '"%.1f" % (d["branch_bytes"]/1e6)') | $(echo "$j" | js '"%.2f" % (d["cube_bytes"]/1e6)') | $(echo "$j" | js '"%.0f" % d["bake_ms"]') |"
@@ -29,7 +29,7 @@ done
 
 echo
 echo "## One fir (13 m), 480x480: FLIP around the tree vs geometry --spp 16, bench median ms (5 frames)"
-echo "hbt BTF levels: \`--hbt-levels 2\` (no meshes); + small: \`--hbt-small-branches\`; default chain: levels 3."
+echo "hbt BTF levels: \`--set hbt.levels=2\` (no meshes); + small: \`--set hbt.small_branches=true\`; default chain: levels 3."
 echo "| distance m | height px | geometry 1 spp | hbt main lowest | hbt + small | hbt default | hbt default + small | trees opened, main branches opened (+ small) | ms: geometry / main / + small / default / default + small |"
 echo "|---|---|---|---|---|---|---|---|---|"
 for d in 20 35 60; do
@@ -37,17 +37,17 @@ for d in 20 35 60; do
   $S render $SCENE "${common[@]}" --spp 16 --out "$OUT/fir-$d-ref.png" 2>>"$OUT/log.txt"
   declare -A cfg=(
     [geometry]="--technique geometry"
-    [main]="--technique hbt --hbt-levels 2"
-    [small]="--technique hbt --hbt-levels 2 --hbt-small-branches"
+    [main]="--technique hbt --set hbt.levels=2"
+    [small]="--technique hbt --set hbt.levels=2 --set hbt.small_branches=true"
     [default]="--technique hbt"
-    [default-small]="--technique hbt --hbt-small-branches"
+    [default-small]="--technique hbt --set hbt.small_branches=true"
   )
   row="| $d | $h"
   for k in geometry main small default default-small; do
     $S render $SCENE "${common[@]}" ${cfg[$k]} --out "$OUT/fir-$d-$k.png" --stats "$OUT/fir-$d-$k.json" 2>>"$OUT/log.txt"
     row="$row | $(flip "$OUT/fir-$d-ref.png" "$OUT/fir-$d-$k.png" "${crop[@]}")"
   done
-  opened="$(js 'd.get("trees_opened"), d.get("branches_opened")' <"$OUT/fir-$d-small.json" | tr -d "()'")"
+  opened="$(js 'd.get("hbt", {}).get("trees_opened"), d.get("hbt", {}).get("branches_opened")' <"$OUT/fir-$d-small.json" | tr -d "()'")"
   ms=""
   for k in geometry main small default default-small; do
     $S bench $SCENE "${common[@]}" ${cfg[$k]} --frames 5 --json >"$OUT/bench-$d-$k.json" 2>>"$OUT/log.txt"

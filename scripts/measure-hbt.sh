@@ -45,8 +45,8 @@ for sun in 200,40 20,40 110,30 290,30 200,8 20,8 110,70 0,88; do
     $S render $SCENE "${common[@]}" --spp 16 --out "$OUT/relight-$tag-ref.png" 2>>"$OUT/log.txt"
     $S render $SCENE "${common[@]}" --out "$OUT/relight-$tag-geometry.png" 2>>"$OUT/log.txt"
     $S render $SCENE "${common[@]}" --technique hbt --out "$OUT/relight-$tag-hbt.png" 2>>"$OUT/log.txt"
-    $S render $SCENE "${common[@]}" --technique hbt --hbt-levels 2 --out "$OUT/relight-$tag-hbt-btf.png" 2>>"$OUT/log.txt"
-    $S render $SCENE "${common[@]}" --technique hbt --hbt-levels 2 --hbt-fixed-light="$fixed" --out "$OUT/relight-$tag-fixed.png" 2>>"$OUT/log.txt"
+    $S render $SCENE "${common[@]}" --technique hbt --set hbt.levels=2 --out "$OUT/relight-$tag-hbt-btf.png" 2>>"$OUT/log.txt"
+    $S render $SCENE "${common[@]}" --technique hbt --set hbt.levels=2 --set "hbt.fixed_light=[$fixed]" --out "$OUT/relight-$tag-fixed.png" 2>>"$OUT/log.txt"
     $S render $SCENE "${common[@]}" --technique boxtree --out "$OUT/relight-$tag-boxtree.png" 2>>"$OUT/log.txt"
     crop=(--crop "$(python3 -c "h=$h; s=int(1.3*h); print(f'{max(320-s//2,0)},{max(240-s//2,0)},{s},{s}')")")
     r="$OUT/relight-$tag-ref.png"
@@ -56,7 +56,7 @@ done
 
 echo
 echo "## Tree level baked from geometry or rendered from the branches (MNP01 §6.1), tree level drawn alone"
-echo "| sun az/el | height px | from geometry (default) | from branches (--hbt-tree-from branches) |"
+echo "| sun az/el | height px | from geometry (default) | from branches (--set hbt.tree_from_branches=true) |"
 echo "|---|---|---|---|"
 for sun in 200,40 20,8; do
   for h in 60 30; do
@@ -66,7 +66,7 @@ for sun in 200,40 20,8; do
     crop=(--crop "$(python3 -c "h=$h; s=int(1.3*h); print(f'{max(320-s//2,0)},{max(240-s//2,0)},{s},{s}')")")
     row="| $sun | $h |"
     for from in geometry branches; do
-      $S render $SCENE --size 640x480 --camera "1100,8,$z:1100,8,1100" --sun "$sun" --technique hbt --hbt-levels 2 --hbt-open-pixels 16 --hbt-tree-from $from --out "$OUT/tree-from-$from-$tag.png" 2>>"$OUT/log.txt"
+      $S render $SCENE --size 640x480 --camera "1100,8,$z:1100,8,1100" --sun "$sun" --technique hbt --set hbt.levels=2 --set hbt.open_texel_pixels=16 --set hbt.tree_from_branches=$([ $from = branches ] && echo true || echo false) --out "$OUT/tree-from-$from-$tag.png" 2>>"$OUT/log.txt"
       row="$row $(flip "$OUT/relight-$tag-ref.png" "$OUT/tree-from-$from-$tag.png" "${crop[@]}") |"
     done
     echo "$row"
@@ -82,16 +82,16 @@ for size in 480x270 1280x720; do
   [ -f "$ref" ] || $S render --size $size --spp 16 --out "$ref" 2>>"$OUT/log.txt"
   [ -f "$REFS/default-$size-geometry.png" ] || $S render --size $size --out "$REFS/default-$size-geometry.png" 2>>"$OUT/log.txt"
   $S render --size $size --technique hbt --out "$OUT/default-$size-hbt.png" --stats "$OUT/default-$size-hbt.json" 2>>"$OUT/log.txt"
-  $S render --size $size --technique hbt --hbt-levels 2 --out "$OUT/default-$size-hbt-l2.png" 2>>"$OUT/log.txt"
-  $S render --size $size --technique hbt --hbt-levels 2 --hbt-shadows cubemaps --out "$OUT/default-$size-hbt-cubemaps.png" 2>>"$OUT/log.txt"
-  $S render --size $size --technique hbt --hbt-levels 1 --out "$OUT/default-$size-hbt-l1.png" 2>>"$OUT/log.txt"
-  $S render --size $size --technique hbt --hbt-tree-from branches --out "$OUT/default-$size-hbt-composed.png" 2>>"$OUT/log.txt"
+  $S render --size $size --technique hbt --set hbt.levels=2 --out "$OUT/default-$size-hbt-l2.png" 2>>"$OUT/log.txt"
+  $S render --size $size --technique hbt --set hbt.levels=2 --set hbt.shadows=cubemaps --out "$OUT/default-$size-hbt-cubemaps.png" 2>>"$OUT/log.txt"
+  $S render --size $size --technique hbt --set hbt.levels=1 --out "$OUT/default-$size-hbt-l1.png" 2>>"$OUT/log.txt"
+  $S render --size $size --technique hbt --set hbt.tree_from_branches=true --out "$OUT/default-$size-hbt-composed.png" 2>>"$OUT/log.txt"
   echo "| $size | $(flip "$ref" "$REFS/default-$size-geometry.png") | $(flip "$ref" "$OUT/default-$size-hbt.png") | $(flip "$ref" "$OUT/default-$size-hbt-l2.png") | $(flip "$ref" "$OUT/default-$size-hbt-cubemaps.png") | $(flip "$ref" "$OUT/default-$size-hbt-l1.png") | $(flip "$ref" "$OUT/default-$size-hbt-composed.png") |"
 done
 python3 - "$OUT/default-480x270-hbt.json" <<'PY'
 import json, sys
 d = json.load(open(sys.argv[1]))
-print(f"\nVisibility structure (default scene, {d['trees_total']} trees): {d['visibility_bytes']/1e6:.1f} MB, built in {d['visibility_ms']:.0f} ms; trees opened at 480x270: {d['trees_opened']}; camera triangles {d['triangles']}")
+print(f"\nVisibility structure (default scene, {d['trees_total']} trees): {d['hbt']['visibility_bytes']/1e6:.1f} MB, built in {d['hbt']['visibility_ms']:.0f} ms; trees opened at 480x270: {d['hbt']['trees_opened']}; camera triangles {d['triangles']}")
 PY
 
 echo
@@ -102,9 +102,9 @@ for size in 480x270 1280x720; do
   for round in 1 2; do
     for t in geometry hbt hbt-l2 hbt-l1 hbt-open; do
       case $t in
-        hbt-l2) args=(--technique hbt --hbt-levels 2) ;;
-        hbt-l1) args=(--technique hbt --hbt-levels 1) ;;
-        hbt-open) args=(--technique hbt --hbt-levels 2 --hbt-open-pixels 0.1) ;;
+        hbt-l2) args=(--technique hbt --set hbt.levels=2) ;;
+        hbt-l1) args=(--technique hbt --set hbt.levels=1) ;;
+        hbt-open) args=(--technique hbt --set hbt.levels=2 --set hbt.open_texel_pixels=0.1) ;;
         *) args=(--technique $t) ;;
       esac
       [ "$size" = 1280x720 ] && [ "$t" = hbt-open ] && continue

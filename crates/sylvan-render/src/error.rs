@@ -12,12 +12,15 @@ pub enum RenderError {
     Plant(String),
     /// `--technique` names nothing known.
     #[error(
-        "unknown technique '{0}' — use one of: geometry, boxtree, hbt, billboard-cloud, zfield, shadermap, auto"
+        "unknown technique '{0}' — use one of: {names}{hint}",
+        names = crate::technique::registry::names().join(", "),
+        hint = crate::technique::registry::nearest_hint(.0)
     )]
     UnknownTechnique(String),
-    /// A known technique that this build does not implement yet.
-    #[error("technique '{0}' is not implemented yet — use --technique geometry")]
-    NotImplemented(&'static str),
+    /// A technique parameter: unknown key, wrong type or out of range (the message names
+    /// where it was set).
+    #[error("{0}")]
+    Param(String),
     /// An invalid option value.
     #[error("{0}")]
     Option(String),

@@ -31,4 +31,4 @@ pub mod texture;
 pub use error::RenderError;
 pub use frame::DebugView;
 pub use renderer::{FrameStats, RenderOptions, Renderer, load_plants};
-pub use technique::TechniqueKind;
+pub use technique::{Technique, registry};

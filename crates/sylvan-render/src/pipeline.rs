@@ -106,26 +106,27 @@ pub fn build(gpu: &Gpu, spec: &PipelineSpec) -> wgpu::RenderPipeline {
         })
 }
 
-/// Concatenates the shared frame bindings with a shader's own source.
+/// Concatenates the registry's technique ids, the shared frame bindings and a shader's own
+/// source.
 pub fn with_frame(source: &str) -> String {
-    format!("{}\n{}", include_str!("shaders/frame.wgsl"), source)
+    format!(
+        "{}\n{}\n{}",
+        crate::technique::registry::wgsl_prelude(),
+        include_str!("shaders/frame.wgsl"),
+        source
+    )
 }
 
 /// Every WGSL module the renderer builds, as compiled (frame bindings prepended), by label.
 /// Tests parse and validate each with naga, without a GPU.
 pub fn shader_sources() -> Vec<(&'static str, String)> {
-    vec![
+    let mut out = vec![
         ("sky", with_frame(include_str!("shaders/sky.wgsl"))),
         ("terrain", with_frame(include_str!("shaders/terrain.wgsl"))),
-        (
-            "geometry",
-            with_frame(include_str!("technique/geometry/geometry.wgsl")),
-        ),
-        (
-            "boxtree",
-            with_frame(include_str!("technique/boxtree/boxtree.wgsl")),
-        ),
-        ("hbt", with_frame(include_str!("technique/hbt/hbt.wgsl"))),
         ("bake", include_str!("bake/bake.wgsl").to_string()),
-    ]
+    ];
+    for e in crate::technique::registry::REGISTRY {
+        out.extend((e.shaders)());
+    }
+    out
 }

@@ -6,16 +6,15 @@ use crate::frame::{self, CASCADES, DebugView, FrameResources, Frustum, GpuFrame,
 use crate::instances::{Instances, SpeciesBounds};
 use crate::pipeline::HDR_FORMAT;
 use crate::sky::SkyPass;
-use crate::technique::any::{AnyTechnique, BakeProgress, PrepareInput};
-use crate::technique::boxtree::BoxTreeParams;
-use crate::technique::hbt::HbtParams;
-use crate::technique::{DrawContext, DrawCounts, FrameInput, TechniqueKind};
+use crate::technique::{
+    BakeProgress, BandRange, BuildContext, DrawContext, DrawCounts, FrameInput, Technique, registry,
+};
 use crate::terrain::TerrainPass;
 use glam::{Mat4, Vec3};
 use std::collections::BTreeMap;
 use sylvan_gpu::{FrameTimer, Gpu, OUTPUT_FORMAT, RenderTarget, Resolver, TimerKind};
 use sylvan_plant::Plant;
-use sylvan_scene::{Camera, PlantSource, Scene, Sun};
+use sylvan_scene::{Camera, PlantSource, Scene, Setting, Sun};
 
 /// Largest supersampling factor per axis (`--spp` up to 64).
 pub const MAX_SPP: u32 = 64;
@@ -29,8 +28,8 @@ pub struct RenderOptions {
     pub height: u32,
     /// Samples per pixel: a perfect square (1, 4, 9, 16, …); `√spp` supersampling per axis.
     pub spp: u32,
-    /// The tree representation.
-    pub technique: TechniqueKind,
+    /// The tree representation: a registry name (`geometry`, `boxtree`, `hbt`, `auto`, …).
+    pub technique: String,
     /// Cascaded shadow maps on or off.
     pub shadows: bool,
     /// Shadow-map resolution per cascade.
@@ -43,10 +42,9 @@ pub struct RenderOptions {
     pub wall_timer: bool,
     /// Debug colouring (the viewer's debug views); [`DebugView::None`] for normal images.
     pub debug: DebugView,
-    /// Parameters of the `boxtree` technique.
-    pub boxtree: BoxTreeParams,
-    /// Parameters of the `hbt` technique.
-    pub hbt: HbtParams,
+    /// Technique parameters given on the command line (`--set`), applied over the scene's
+    /// `[technique.NAME]` and `[[lod.band]]` tables.
+    pub settings: Vec<Setting>,
     /// Where baked assets are cached.
     pub cache: CachePolicy,
 }
@@ -57,15 +55,14 @@ impl Default for RenderOptions {
             width: 1280,
             height: 720,
             spp: 1,
-            technique: TechniqueKind::Geometry,
+            technique: "geometry".to_string(),
             shadows: true,
             shadow_resolution: 2048,
             shadow_distance: 1500.0,
             exposure: 1.0,
             wall_timer: false,
             debug: DebugView::None,
-            boxtree: BoxTreeParams::default(),
-            hbt: HbtParams::default(),
+            settings: Vec::new(),
             cache: CachePolicy::Default,
         }
     }
@@ -109,19 +106,8 @@ pub struct FrameStats {
     pub asset_bytes: u64,
     /// GPU bytes of everything the renderer holds (assets, terrain, shadow maps, targets).
     pub gpu_bytes: u64,
-    /// CPU bytes of visibility structures (`hbt`'s cube-maps; 0 for other techniques).
-    pub visibility_bytes: u64,
-    /// Milliseconds spent building them when the renderer was made.
-    pub visibility_ms: f64,
-    /// Trees drawn opened into a lower level of their hierarchy (`hbt`), this frame.
-    pub trees_opened: u32,
-    /// Of those, trees drawn as their meshes (`hbt` level 3), this frame.
-    pub trees_meshed: u32,
-    /// Main branches drawn as their small branches (`hbt` with small branches), this frame.
-    pub branches_opened: u32,
-    /// Main branches (and rests) of opened trees drawn as their meshes (`hbt` level 3, branch
-    /// by branch), this frame; trees drawn as meshes as a whole are not counted.
-    pub branches_meshed: u32,
+    /// Each drawing technique's own statistics ([`Technique::stats`]), by technique name.
+    pub technique_stats: BTreeMap<String, BTreeMap<String, f64>>,
 }
 
 struct Targets {
@@ -137,7 +123,7 @@ pub struct Renderer {
     frame: FrameResources,
     sky: SkyPass,
     terrain: TerrainPass,
-    technique: AnyTechnique,
+    technique: Box<dyn Technique>,
     bake_reports: Vec<BakeReport>,
     instances: Instances,
     resolver: Resolver,
@@ -211,21 +197,30 @@ impl Renderer {
             })
             .collect();
         let instances = Instances::new(gpu, &scene.trees, &bounds);
-        let (technique, bake_reports) = AnyTechnique::prepare(
+        let settings: Vec<Setting> = scene
+            .technique_params
+            .iter()
+            .chain(&options.settings)
+            .cloned()
+            .collect();
+        registry::check_settings(&settings)?;
+        for band in &scene.lod_bands {
+            registry::check_settings(&band.params)?;
+        }
+        let entry = registry::find(&options.technique)?;
+        let built = (entry.build)(&mut BuildContext {
             gpu,
-            &frame,
+            frame: &frame,
+            scene,
             plants,
-            &PrepareInput {
-                kind: options.technique,
-                boxtree: &options.boxtree,
-                hbt: &options.hbt,
-                policy: &options.cache,
-                lod_chain: &scene.lod_chain,
-                instances: &instances,
-                terrain: Some(&scene.terrain),
-            },
+            population: &instances,
+            band: BandRange::ALL,
+            settings: &settings,
+            overrides: &options.settings,
+            policy: &options.cache,
             progress,
-        )?;
+        })?;
+        let (technique, bake_reports) = (built.technique, built.reports);
         let t = &scene.terrain;
         let (lo, hi) = t
             .heights
@@ -322,6 +317,12 @@ impl Renderer {
         );
         let view_proj = view.view_proj();
         let frustum = Frustum::from_matrix(view_proj);
+        let mut encoder = gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("frame"),
+            });
+        self.timer.begin(&mut encoder);
         let cpu_start = std::time::Instant::now();
         self.instances.update(
             gpu,
@@ -344,7 +345,7 @@ impl Renderer {
             }),
             cascade_far: cascades.map(|c| c.far),
         };
-        self.technique.update(gpu, &input)?;
+        self.technique.prepare_frame(gpu, &mut encoder, &input)?;
         let cpu_ms = cpu_start.elapsed().as_secs_f64() * 1e3;
 
         let raw = self.frame_uniforms(&view, view_proj, sun, sun_dir, shadows, &cascades);
@@ -356,12 +357,6 @@ impl Renderer {
             gpu.queue.write_buffer(buffer, 0, bytemuck::bytes_of(&r));
         }
 
-        let mut encoder = gpu
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("frame"),
-            });
-        self.timer.begin(&mut encoder);
         let mut shadow_counts = DrawCounts::default();
         // With shadows off the maps are never sampled (`sun_dir.w` = 0): skip the passes.
         for c in (0..CASCADES).filter(|_| shadows) {
@@ -389,7 +384,7 @@ impl Renderer {
                 instances: &self.instances,
                 ranges: &self.instances.ranges[1 + c],
             };
-            shadow_counts += self.technique.draw_shadow(&mut pass, &ctx);
+            shadow_counts += self.technique.draw(&mut pass, &ctx);
         }
         let mut main_counts = DrawCounts::default();
         {
@@ -443,14 +438,20 @@ impl Renderer {
         gpu.check()?;
 
         let asset_bytes = self.technique.bytes();
-        let h = self.technique.hierarchy_stats();
+        let technique_stats = self
+            .technique
+            .stats_by_technique()
+            .into_iter()
+            .filter(|(_, v)| !v.is_empty())
+            .map(|(name, v)| {
+                (
+                    name.to_string(),
+                    v.into_iter().map(|(k, x)| (k.to_string(), x)).collect(),
+                )
+            })
+            .collect();
         Ok(FrameStats {
-            visibility_bytes: h.visibility_bytes,
-            visibility_ms: h.visibility_ms,
-            trees_opened: h.trees_opened,
-            trees_meshed: h.trees_meshed,
-            branches_opened: h.branches_opened,
-            branches_meshed: h.branches_meshed,
+            technique_stats,
             frame_ms,
             cpu_ms,
             timer: self.timer.kind(),

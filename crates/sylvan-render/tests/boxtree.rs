@@ -7,7 +7,7 @@ use common::gpu;
 use glam::{Vec2, Vec3};
 use sylvan_plant::Plant;
 use sylvan_render::bake::{self, CachePolicy, cache};
-use sylvan_render::technique::boxtree::{BoxTree, BoxTreeParams, PlaneLayout};
+use sylvan_render::technique::boxtree::{BoxTreeBake, BoxTreeBakeParams, PlaneLayout};
 
 fn temp_dir(name: &str) -> std::path::PathBuf {
     let d = std::env::temp_dir().join(format!("sylvan-{name}-{}", std::process::id()));
@@ -76,14 +76,19 @@ fn baked_faces_cover_what_the_geometry_covers() {
         ("prunus", PlaneLayout::Diagonal),
     ] {
         let plant = sylvan_plant::preset(preset).unwrap();
-        let params = BoxTreeParams {
+        let params = BoxTreeBakeParams {
             layout,
             ..Default::default()
         };
-        let baked =
-            bake::load_or_bake::<BoxTree>(&gpu, &plant, &params, &CachePolicy::Off, &mut |_, _| {})
-                .unwrap()
-                .0;
+        let baked = bake::load_or_bake::<BoxTreeBake>(
+            &gpu,
+            &plant,
+            &params,
+            &CachePolicy::Off,
+            &mut |_, _| {},
+        )
+        .unwrap()
+        .0;
         let root = &baked.boxes[0];
         let frames = layout.frames(Vec3::from(root.min), Vec3::from(root.max));
         let per_plane = layout.sides() as usize;
@@ -115,10 +120,10 @@ fn cache_is_reused_invalidated_and_repaired() {
     let gpu = gpu();
     let dir = temp_dir("bake-cache");
     let plant = sylvan_plant::preset("bush").unwrap();
-    let params = BoxTreeParams::default();
+    let params = BoxTreeBakeParams::default();
     let policy = CachePolicy::Dir(dir.clone());
-    let bake = |plant: &Plant, params: &BoxTreeParams, policy: &CachePolicy| {
-        bake::load_or_bake::<BoxTree>(&gpu, plant, params, policy, &mut |_, _| {}).unwrap()
+    let bake = |plant: &Plant, params: &BoxTreeBakeParams, policy: &CachePolicy| {
+        bake::load_or_bake::<BoxTreeBake>(&gpu, plant, params, policy, &mut |_, _| {}).unwrap()
     };
     let (first, r1) = bake(&plant, &params, &policy);
     assert!(!r1.from_cache && r1.stale.is_none());
@@ -129,7 +134,7 @@ fn cache_is_reused_invalidated_and_repaired() {
     assert!(r2.from_cache, "same inputs must come from the cache");
     assert_eq!(again, first);
     // A changed parameter and a changed plant each re-bake (different key).
-    let other = BoxTreeParams {
+    let other = BoxTreeBakeParams {
         tile: 32,
         ..params.clone()
     };
@@ -159,8 +164,8 @@ fn cache_is_reused_invalidated_and_repaired() {
     // The key on disk matches what the technique computes.
     let key = cache::CacheKey {
         technique: "boxtree".into(),
-        format_version: <BoxTree as sylvan_render::technique::Representation>::FORMAT_VERSION,
-        hash: <BoxTree as sylvan_render::technique::Representation>::input_hash(&plant, &params),
+        format_version: <BoxTreeBake as sylvan_render::bake::Bake>::FORMAT_VERSION,
+        hash: bake::cache_key::<BoxTreeBake>(&plant, &params),
     };
     assert!(matches!(cache::read(&path, &key), cache::Lookup::Hit(_)));
     std::fs::remove_dir_all(&dir).unwrap();
@@ -170,7 +175,7 @@ fn render_scene(
     gpu: &sylvan_gpu::Gpu,
     scene: &sylvan_scene::Scene,
     plants: &[Plant],
-    technique: sylvan_render::TechniqueKind,
+    technique: &str,
     spp: u32,
     frames: usize,
 ) -> (image::RgbImage, sylvan_render::Renderer) {
@@ -178,7 +183,7 @@ fn render_scene(
         width: 192,
         height: 108,
         spp,
-        technique,
+        technique: technique.into(),
         cache: CachePolicy::Off,
         ..Default::default()
     };
@@ -192,7 +197,6 @@ fn render_scene(
 
 #[test]
 fn boxtree_forest_is_as_close_to_the_reference_as_aliased_geometry() {
-    use sylvan_render::TechniqueKind::{BoxTree as Bt, Geometry};
     let gpu = gpu();
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),
@@ -200,9 +204,9 @@ fn boxtree_forest_is_as_close_to_the_reference_as_aliased_geometry() {
     );
     let scene = sylvan_scene::Scene::load(std::path::Path::new(path)).unwrap();
     let plants = sylvan_render::load_plants(&scene).unwrap();
-    let (reference, _) = render_scene(&gpu, &scene, &plants, Geometry, 16, 1);
-    let (aliased, _) = render_scene(&gpu, &scene, &plants, Geometry, 1, 1);
-    let (boxtree, mut r) = render_scene(&gpu, &scene, &plants, Bt, 1, 3);
+    let (reference, _) = render_scene(&gpu, &scene, &plants, "geometry", 16, 1);
+    let (aliased, _) = render_scene(&gpu, &scene, &plants, "geometry", 1, 1);
+    let (boxtree, mut r) = render_scene(&gpu, &scene, &plants, "boxtree", 1, 3);
     let flip = |a: &image::RgbImage, b: &image::RgbImage| sylvan_eval::flip(a, b).unwrap().mean;
     let (f_geo, f_box) = (flip(&reference, &aliased), flip(&reference, &boxtree));
     eprintln!("FLIP vs 16-spp reference: geometry 1 spp {f_geo:.4}, boxtree {f_box:.4}");
@@ -217,7 +221,7 @@ fn boxtree_forest_is_as_close_to_the_reference_as_aliased_geometry() {
         trees: Vec::new(),
         ..scene.clone()
     };
-    let (bare, _) = render_scene(&gpu, &empty, &plants, Geometry, 1, 1);
+    let (bare, _) = render_scene(&gpu, &empty, &plants, "geometry", 1, 1);
     let f_bare = flip(&reference, &bare);
     eprintln!("FLIP of the same view without trees: {f_bare:.4}");
     assert!(f_bare > 1.3 * f_box, "trees must matter in this view");
@@ -229,4 +233,81 @@ fn boxtree_forest_is_as_close_to_the_reference_as_aliased_geometry() {
         before,
         "no GPU allocation on a repeated frame"
     );
+}
+
+/// Through the registry and the renderer: a changed draw parameter (from `--set` or a scene
+/// table) reuses every cached asset, a changed bake parameter re-bakes — for every technique
+/// that bakes (a bake key and a draw key of each).
+#[test]
+fn draw_settings_reuse_the_cache_and_bake_settings_rebake() {
+    use sylvan_scene::Setting;
+    let gpu = gpu();
+    let dir = temp_dir("settings-cache");
+    let plant = common::test_tree();
+    let camera = sylvan_scene::Camera {
+        position: Vec3::new(20.0, 8.0, 20.0),
+        look_at: Vec3::new(40.0, 5.0, 40.0),
+        fov_deg: 40.0,
+    };
+    let trees = vec![sylvan_scene::TreeInstance {
+        position: Vec3::new(40.0, 0.0, 40.0),
+        species: 0,
+        height: 10.0,
+        rotation: 0.0,
+    }];
+    let scene = common::scene(
+        common::terrain(80.0, 9, |_, _| 0.0),
+        trees,
+        camera,
+        common::sun(140.0, 35.0),
+    );
+    let set = |args: &[&str]| -> Vec<Setting> {
+        args.iter().map(|a| Setting::from_arg(a).unwrap()).collect()
+    };
+    let small_hbt = [
+        "hbt.views=6",
+        "hbt.lights=6",
+        "hbt.tile=16",
+        "hbt.supersample=1",
+    ];
+    for (technique, base, draw, bake) in [
+        (
+            "boxtree",
+            vec![],
+            "boxtree.texel_pixels=3",
+            "boxtree.tile=32",
+        ),
+        (
+            "hbt",
+            small_hbt.to_vec(),
+            "hbt.open_texel_pixels=4",
+            "hbt.cube_resolution=4",
+        ),
+    ] {
+        let from_cache = |extra: &str| {
+            let mut args = base.clone();
+            if !extra.is_empty() {
+                args.push(extra);
+            }
+            let options = sylvan_render::RenderOptions {
+                width: 32,
+                height: 32,
+                technique: technique.into(),
+                settings: set(&args),
+                cache: CachePolicy::Dir(dir.clone()),
+                ..Default::default()
+            };
+            let r = sylvan_render::Renderer::new(&gpu, &scene, std::slice::from_ref(&plant), &options)
+                .expect("renderer");
+            r.bake_reports().iter().all(|b| b.from_cache)
+        };
+        from_cache("");
+        assert!(
+            from_cache(""),
+            "{technique}: the same settings read the cache"
+        );
+        assert!(from_cache(draw), "{technique}: {draw} must not re-bake");
+        assert!(!from_cache(bake), "{technique}: {bake} must re-bake");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -7,7 +7,8 @@ use common::gpu;
 use glam::Vec3;
 use sylvan_render::bake::CachePolicy;
 use sylvan_render::directions::DirectionSet;
-use sylvan_render::technique::hbt::{self, HbtBaked, HbtParams};
+use sylvan_render::technique::hbt::{self, HbtBake, HbtBakeParams, HbtBaked, HbtDrawParams};
+use sylvan_render::technique::params::settings_of;
 use sylvan_scene::{Camera, TreeInstance};
 
 /// The test tree with every leaf card turned to a random orientation about its centre, so the
@@ -40,6 +41,101 @@ fn isotropic_tree() -> sylvan_plant::Plant {
         }
     }
     plant
+}
+
+/// Every `hbt` parameter in one struct, for terse tests: `bake()` and `draw()` split it into
+/// the technique's two parameter types (`levels` ≥ 2 bakes the level below, as a user would
+/// expect), `settings()` hands it to a renderer.
+#[derive(Debug, Clone, PartialEq)]
+struct HbtParams {
+    levels: u32,
+    view_level: u32,
+    light_level: u32,
+    branch_view_level: u32,
+    branch_light_level: u32,
+    max_branch_objects: u32,
+    cube_resolution: u32,
+    tile: u32,
+    supersample: u32,
+    shadow_resolution: u32,
+    tree_from_branches: bool,
+    small_branches: bool,
+    open_texel_pixels: f32,
+    mesh_texel_pixels: f32,
+    mesh_per_branch: bool,
+    band: f32,
+    shadows: hbt::HbtShadows,
+    min_weight: f32,
+    projection: hbt::HbtProjection,
+    fixed_light: Option<[f32; 3]>,
+}
+
+impl Default for HbtParams {
+    fn default() -> Self {
+        let (b, d) = (HbtBakeParams::default(), HbtDrawParams::default());
+        Self {
+            levels: d.levels,
+            view_level: b.view_level,
+            light_level: b.light_level,
+            branch_view_level: b.branch_view_level,
+            branch_light_level: b.branch_light_level,
+            max_branch_objects: b.max_branch_objects,
+            cube_resolution: b.cube_resolution,
+            tile: b.tile,
+            supersample: b.supersample,
+            shadow_resolution: b.shadow_resolution,
+            tree_from_branches: b.tree_from_branches,
+            small_branches: b.small_branches,
+            open_texel_pixels: d.open_texel_pixels,
+            mesh_texel_pixels: d.mesh_texel_pixels,
+            mesh_per_branch: d.mesh_per_branch,
+            band: d.band,
+            shadows: d.shadows,
+            min_weight: d.min_weight,
+            projection: d.projection,
+            fixed_light: d.fixed_light,
+        }
+    }
+}
+
+impl HbtParams {
+    fn bake(&self) -> HbtBakeParams {
+        HbtBakeParams {
+            view_level: self.view_level,
+            light_level: self.light_level,
+            tile: self.tile,
+            supersample: self.supersample,
+            shadow_resolution: self.shadow_resolution,
+            branches: self.levels >= 2,
+            branch_view_level: self.branch_view_level,
+            branch_light_level: self.branch_light_level,
+            max_branch_objects: self.max_branch_objects,
+            cube_resolution: self.cube_resolution,
+            tree_from_branches: self.tree_from_branches,
+            small_branches: self.small_branches,
+            compose_min_weight: HbtBakeParams::default().compose_min_weight,
+        }
+    }
+
+    fn draw(&self) -> HbtDrawParams {
+        HbtDrawParams {
+            levels: self.levels,
+            open_texel_pixels: self.open_texel_pixels,
+            mesh_texel_pixels: self.mesh_texel_pixels,
+            mesh_per_branch: self.mesh_per_branch,
+            band: self.band,
+            shadows: self.shadows,
+            min_weight: self.min_weight,
+            projection: self.projection,
+            fixed_light: self.fixed_light,
+        }
+    }
+
+    fn settings(&self) -> Vec<sylvan_scene::Setting> {
+        let mut s = settings_of("hbt", &self.bake());
+        s.extend(settings_of("hbt", &self.draw()));
+        s
+    }
 }
 
 /// Small but faithful bake parameters for tests (18 × 18 directions, 32 px), the BTF levels
@@ -87,7 +183,7 @@ fn baked_btf_is_lit_and_self_shadowed() {
     let plant = isotropic_tree();
     let p = params();
     let start = std::time::Instant::now();
-    let b = hbt::bake::bake(&gpu, &plant, &p, |_, _| {}).expect("bake");
+    let b = hbt::bake::bake(&gpu, &plant, &p.bake(), |_, _| {}).expect("bake");
     eprintln!(
         "test tree: {} + {} images of {}², {} bytes, baked in {:.0} ms",
         b.direct.len(),
@@ -195,7 +291,7 @@ fn reconstruction_weights_are_a_partition_of_unity() {
 fn render(
     gpu: &sylvan_gpu::Gpu,
     scene: &sylvan_scene::Scene,
-    technique: sylvan_render::TechniqueKind,
+    technique: &str,
     hbt: &HbtParams,
     spp: u32,
 ) -> image::RgbImage {
@@ -203,8 +299,8 @@ fn render(
         width: 160,
         height: 160,
         spp,
-        technique,
-        hbt: hbt.clone(),
+        technique: technique.into(),
+        settings: hbt.settings(),
         cache: CachePolicy::Off,
         ..Default::default()
     };
@@ -213,7 +309,6 @@ fn render(
 
 #[test]
 fn relighting_beats_an_impostor_baked_under_one_light() {
-    use sylvan_render::TechniqueKind::{Geometry, Hbt};
     let gpu = gpu();
     // A 3 × 3 grove seen from the south-west, 60–80 m away (about a texel per pixel); the sun
     // low behind it (back-lit), far from the front light a fixed-light impostor was made under.
@@ -236,15 +331,15 @@ fn relighting_beats_an_impostor_baked_under_one_light() {
     };
     let sun = common::sun(45.0, 20.0);
     let scene = common::scene(common::terrain(120.0, 33, |_, _| 0.0), trees, camera, sun);
-    let reference = render(&gpu, &scene, Geometry, &params(), 16);
-    let relit = render(&gpu, &scene, Hbt, &params(), 1);
+    let reference = render(&gpu, &scene, "geometry", &params(), 16);
+    let relit = render(&gpu, &scene, "hbt", &params(), 1);
     // The fixed light: from the camera's side (azimuth 225°, elevation 35°).
     let front = common::sun(225.0, 35.0).direction();
     let fixed = HbtParams {
         fixed_light: Some(front.to_array()),
         ..params()
     };
-    let frozen = render(&gpu, &scene, Hbt, &fixed, 1);
+    let frozen = render(&gpu, &scene, "hbt", &fixed, 1);
     if let Ok(dir) = std::env::var("HBT_DUMP") {
         for (name, img) in [("ref", &reference), ("relit", &relit), ("frozen", &frozen)] {
             img.save(format!("{dir}/{name}.png")).unwrap();
@@ -281,7 +376,7 @@ fn the_level_below_gets_its_own_btfs_placements_and_cube_maps() {
         ..Default::default()
     };
     let start = std::time::Instant::now();
-    let b = hbt::bake::bake(&gpu, &plant, &p, |_, _| {}).expect("bake");
+    let b = hbt::bake::bake(&gpu, &plant, &p.bake(), |_, _| {}).expect("bake");
     let (tree_bytes, branch_bytes) = b.image_bytes();
     eprintln!(
         "pine, 2 levels (6 × 6 directions, 16²): {} objects for {} placements ({} distinct main branches), {tree_bytes} + {branch_bytes} image bytes, {} cube-map bytes, {:.0} ms",
@@ -355,7 +450,6 @@ fn the_level_below_gets_its_own_btfs_placements_and_cube_maps() {
 #[test]
 fn cache_is_reused_and_keyed_by_the_bake_parameters() {
     use sylvan_render::bake::load_or_bake;
-    use sylvan_render::technique::hbt::Hbt;
     let gpu = gpu();
     let dir = std::env::temp_dir().join(format!("sylvan-hbt-cache-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
@@ -369,8 +463,10 @@ fn cache_is_reused_and_keyed_by_the_bake_parameters() {
         light_level: 0,
         ..Default::default()
     };
-    let (a, first) = load_or_bake::<Hbt>(&gpu, &plant, &p, &policy, &mut |_, _| {}).unwrap();
-    let (b, second) = load_or_bake::<Hbt>(&gpu, &plant, &p, &policy, &mut |_, _| {}).unwrap();
+    let (a, first) =
+        load_or_bake::<HbtBake>(&gpu, &plant, &p.bake(), &policy, &mut |_, _| {}).unwrap();
+    let (b, second) =
+        load_or_bake::<HbtBake>(&gpu, &plant, &p.bake(), &policy, &mut |_, _| {}).unwrap();
     assert!(!first.from_cache && second.from_cache);
     assert_eq!(a, b);
     // A draw-only parameter keeps the file; a bake parameter makes a new one.
@@ -379,20 +475,21 @@ fn cache_is_reused_and_keyed_by_the_bake_parameters() {
         projection: hbt::HbtProjection::Cross,
         ..p.clone()
     };
-    let (_, r) = load_or_bake::<Hbt>(&gpu, &plant, &drawn, &policy, &mut |_, _| {}).unwrap();
+    let (_, r) =
+        load_or_bake::<HbtBake>(&gpu, &plant, &drawn.bake(), &policy, &mut |_, _| {}).unwrap();
     assert!(r.from_cache);
     let finer = HbtParams {
         shadow_resolution: 128,
         ..p
     };
-    let (_, r) = load_or_bake::<Hbt>(&gpu, &plant, &finer, &policy, &mut |_, _| {}).unwrap();
+    let (_, r) =
+        load_or_bake::<HbtBake>(&gpu, &plant, &finer.bake(), &policy, &mut |_, _| {}).unwrap();
     assert!(!r.from_cache);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
 fn hbt_forest_is_as_close_to_the_reference_as_aliased_geometry() {
-    use sylvan_render::TechniqueKind::{Geometry, Hbt};
     let gpu = gpu();
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),
@@ -400,20 +497,20 @@ fn hbt_forest_is_as_close_to_the_reference_as_aliased_geometry() {
     );
     let scene = sylvan_scene::Scene::load(std::path::Path::new(path)).unwrap();
     let plants = sylvan_render::load_plants(&scene).unwrap();
-    let render = |technique, spp| {
+    let render = |technique: &str, spp| {
         let options = sylvan_render::RenderOptions {
             width: 192,
             height: 108,
             spp,
-            technique,
+            technique: technique.into(),
             cache: CachePolicy::Off,
             ..Default::default()
         };
         common::render_with_options(&gpu, &scene, &plants, &options)
     };
-    let (reference, _) = render(Geometry, 16);
-    let (aliased, _) = render(Geometry, 1);
-    let (hbt, mut r) = render(Hbt, 1);
+    let (reference, _) = render("geometry", 16);
+    let (aliased, _) = render("geometry", 1);
+    let (hbt, mut r) = render("hbt", 1);
     let flip = |a: &image::RgbImage| sylvan_eval::flip(&reference, a).unwrap().mean;
     let (f_geo, f_hbt) = (flip(&aliased), flip(&hbt));
     eprintln!("FLIP vs 16-spp reference: geometry 1 spp {f_geo:.4}, hbt {f_hbt:.4}");
@@ -454,13 +551,14 @@ fn species_sharing_a_plant_share_its_images() {
     let options = sylvan_render::RenderOptions {
         width: 64,
         height: 64,
-        technique: sylvan_render::TechniqueKind::Hbt,
-        hbt: HbtParams {
+        technique: "hbt".into(),
+        settings: HbtParams {
             view_level: 0,
             light_level: 0,
             tile: 16,
             ..Default::default()
-        },
+        }
+        .settings(),
         cache: CachePolicy::Off,
         ..Default::default()
     };
@@ -484,7 +582,7 @@ fn render_with(
     gpu: &sylvan_gpu::Gpu,
     scene: &sylvan_scene::Scene,
     plants: &[sylvan_plant::Plant],
-    technique: sylvan_render::TechniqueKind,
+    technique: &str,
     hbt: &HbtParams,
     size: u32,
     spp: u32,
@@ -493,8 +591,8 @@ fn render_with(
         width: size,
         height: size,
         spp,
-        technique,
-        hbt: hbt.clone(),
+        technique: technique.into(),
+        settings: hbt.settings(),
         cache: CachePolicy::Off,
         ..Default::default()
     };
@@ -503,7 +601,6 @@ fn render_with(
 
 #[test]
 fn a_tree_in_another_trees_shadow_darkens_as_in_the_reference() {
-    use sylvan_render::TechniqueKind::{Geometry, Hbt};
     let gpu = gpu();
     // Sun from the south (−Z), 35° high: shadows fall towards +Z. A (14 m) stands south of
     // B (10 m), which is in its shadow; C (10 m, same rotation) stands in the open.
@@ -537,13 +634,13 @@ fn a_tree_in_another_trees_shadow_darkens_as_in_the_reference() {
         levels: 2,
         ..Default::default()
     };
-    let reference = render_with(&gpu, &scene, &plants, Geometry, &p, size, 16);
-    let hbt = render_with(&gpu, &scene, &plants, Hbt, &p, size, 1);
+    let reference = render_with(&gpu, &scene, &plants, "geometry", &p, size, 16);
+    let hbt = render_with(&gpu, &scene, &plants, "hbt", &p, size, 1);
     let cubes = HbtParams {
         shadows: hbt::HbtShadows::CubeMaps,
         ..p.clone()
     };
-    let hbt_cubes = render_with(&gpu, &scene, &plants, Hbt, &cubes, size, 1);
+    let hbt_cubes = render_with(&gpu, &scene, &plants, "hbt", &cubes, size, 1);
     let crown = Vec3::new(0.0, 6.0, 0.0);
     let darkening = |img: &image::RgbImage| {
         let shadowed = common::luma_at(img, &scene.camera, b + crown, 3);
@@ -558,10 +655,10 @@ fn a_tree_in_another_trees_shadow_darkens_as_in_the_reference() {
         top,
         sun,
     );
-    let ground_ref = render_with(&gpu, &ground, &plants, Geometry, &p, 96, 16);
-    let ground_hbt = render_with(&gpu, &ground, &plants, Hbt, &p, 96, 1);
+    let ground_ref = render_with(&gpu, &ground, &plants, "geometry", &p, 96, 16);
+    let ground_hbt = render_with(&gpu, &ground, &plants, "hbt", &p, 96, 1);
     let default = HbtParams::default();
-    let ground_default = render_with(&gpu, &ground, &plants, Hbt, &default, 96, 1);
+    let ground_default = render_with(&gpu, &ground, &plants, "hbt", &default, 96, 1);
     // Shadowed ground: darker than 70 % of the lit ground (the 95th percentile).
     let coverage = |img: &image::RgbImage| {
         let mut l: Vec<f32> = img
@@ -664,7 +761,6 @@ fn at_the_switch(
     set: impl Fn(&HbtParams, f32) -> HbtParams,
     p: &HbtParams,
 ) -> (f32, f32, f32) {
-    use sylvan_render::TechniqueKind::{Geometry, Hbt};
     let (size, fov) = (160u32, 40.0f32);
     let ppm = size as f32 / (2.0 * (fov.to_radians() / 2.0).tan());
     let height = 16.0;
@@ -675,21 +771,21 @@ fn at_the_switch(
     let plants = vec![plant.clone()];
     // One bake for the three renders.
     let dir = std::env::temp_dir().join(format!("sylvan-hbt-switch-{what}-{}", std::process::id()));
-    let render = |kind, q: &HbtParams, spp| {
+    let render = |kind: &str, q: &HbtParams, spp| {
         let options = sylvan_render::RenderOptions {
             width: size,
             height: size,
             spp,
-            technique: kind,
-            hbt: q.clone(),
+            technique: kind.into(),
+            settings: q.settings(),
             cache: CachePolicy::Dir(dir.clone()),
             ..Default::default()
         };
         common::render_with_options(gpu, &scene, &plants, &options).0
     };
-    let reference = render(Geometry, p, 16);
-    let closed = render(Hbt, &set(p, pixels * 1.05), 1);
-    let opened = render(Hbt, &set(p, pixels * 0.95), 1);
+    let reference = render("geometry", p, 16);
+    let closed = render("hbt", &set(p, pixels * 1.05), 1);
+    let opened = render("hbt", &set(p, pixels * 0.95), 1);
     std::fs::remove_dir_all(&dir).ok();
     if let Ok(dir) = std::env::var("HBT_DUMP") {
         for (name, img) in [
@@ -737,7 +833,7 @@ fn levels_differ_less_at_the_switch_than_either_differs_from_the_reference() {
         band: 0.0,
         ..Default::default()
     };
-    let baked = hbt::bake::bake(&gpu, &plant, &p, |_, _| {}).expect("bake");
+    let baked = hbt::bake::bake(&gpu, &plant, &p.bake(), |_, _| {}).expect("bake");
     // The bound: switching levels changes the picture less than either level already differs
     // from the reference, so the switch adds no error of its own beyond what each level has.
     // Tree → main branches (meshes kept out: levels 2).
@@ -819,7 +915,7 @@ fn main_branches_open_into_their_small_branches() {
         ..params()
     };
     let start = std::time::Instant::now();
-    let b = hbt::bake::bake(&gpu, &plant, &p, |_, _| {}).expect("bake");
+    let b = hbt::bake::bake(&gpu, &plant, &p.bake(), |_, _| {}).expect("bake");
     let s = &b.small;
     eprintln!(
         "fir, 3 BTF levels: {} main objects / {} placements, {} small objects / {} placements, {:.0} ms",
@@ -904,7 +1000,8 @@ fn main_branches_open_into_their_small_branches() {
         &HbtParams {
             tree_from_branches: true,
             ..p.clone()
-        },
+        }
+        .bake(),
         |_, _| {},
     )
     .expect("composed bake");
@@ -1042,7 +1139,6 @@ fn opened_trees_mesh_branch_by_branch() {
 }
 
 fn meshes_branch_by_branch(gpu: &sylvan_gpu::Gpu, plant: &sylvan_plant::Plant) {
-    use sylvan_render::TechniqueKind::Hbt;
     let p = HbtParams {
         levels: 3,
         view_level: 1,
@@ -1053,7 +1149,7 @@ fn meshes_branch_by_branch(gpu: &sylvan_gpu::Gpu, plant: &sylvan_plant::Plant) {
         open_texel_pixels: 0.1,
         ..Default::default()
     };
-    let baked = hbt::bake::bake(gpu, plant, &p, |_, _| {}).expect("bake");
+    let baked = hbt::bake::bake(gpu, plant, &p.bake(), |_, _| {}).expect("bake");
     let (size, fov) = (160u32, 40.0f32);
     let ppm = size as f32 / (2.0 * (fov.to_radians() / 2.0).tan());
     let height = 16.0;
@@ -1071,15 +1167,16 @@ fn meshes_branch_by_branch(gpu: &sylvan_gpu::Gpu, plant: &sylvan_plant::Plant) {
         let options = sylvan_render::RenderOptions {
             width: size,
             height: size,
-            technique: Hbt,
-            hbt: q.clone(),
+            technique: "hbt".into(),
+            settings: q.settings(),
             cache: CachePolicy::Dir(dir.clone()),
             ..Default::default()
         };
         let mut r = sylvan_render::Renderer::new(gpu, &scene, &plants, &options).expect("renderer");
         let stats = r.render(gpu, &scene.camera, &scene.sun).expect("frame");
         let img = image::DynamicImage::ImageRgba8(r.read_image(gpu).expect("readback")).into_rgb8();
-        (img, stats.branches_meshed, stats.trees_meshed)
+        let stat = |k: &str| stats.technique_stats["hbt"][k] as u32;
+        (img, stat("branches_meshed"), stat("trees_meshed"))
     };
     // Thresholds spanning the placements' texels at this distance, largest first.
     let texels: Vec<f32> = (0..baked.placements.len())

@@ -122,6 +122,8 @@ impl Scene {
             sky: Sky::default(),
             fog: Fog::default(),
             lod_chain: Vec::new(),
+            lod_bands: Vec::new(),
+            technique_params: Vec::new(),
             source: None,
         }
     }

@@ -4,12 +4,14 @@
 
 use crate::error::{ErrorKind, Location, SceneError};
 use crate::heightmap::{Purpose, read_gray};
+use crate::params::{LodBand, Origin, ParamValue, Setting};
 use crate::placement::{Placement, PlacementError, PlacementMethod, place_trees};
 use crate::species::{Growth, RawSpecies, build_species};
 use crate::terrain::{MAX_TERRAIN_SIZE_M, ProceduralTerrain};
 use crate::types::{Camera, Fog, Scene, Sky, Sun, Terrain, TreeInstance};
 use glam::Vec3;
 use serde::Deserialize;
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use toml::Spanned;
 
@@ -27,7 +29,12 @@ struct RawScene {
     camera: Option<RawCamera>,
     lod: Option<RawLod>,
     placement: Option<RawPlacement>,
+    /// `[technique.NAME]` tables: every key with its value's span.
+    technique: Option<BTreeMap<String, RawParams>>,
 }
+
+/// A parameter table: key → value (with where the value is).
+type RawParams = BTreeMap<String, Spanned<toml::Value>>;
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -81,6 +88,18 @@ struct RawCamera {
 struct RawLod {
     #[serde(default)]
     chain: Vec<String>,
+    #[serde(default)]
+    band: Vec<Spanned<RawBand>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawBand {
+    technique: Spanned<String>,
+    from: Spanned<f32>,
+    to: Option<Spanned<f32>>,
+    #[serde(default)]
+    params: RawParams,
 }
 
 #[derive(Deserialize)]
@@ -250,6 +269,15 @@ pub(crate) fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> 
         }
     };
     let camera = build_camera(&cx, raw.camera, &terrain)?;
+    let technique_params = match &raw.technique {
+        Some(tables) => tables
+            .iter()
+            .map(|(name, table)| settings(&cx, name, table))
+            .collect::<Result<Vec<_>, _>>()?
+            .concat(),
+        None => Vec::new(),
+    };
+    let (lod_chain, lod_bands) = build_lod(&cx, raw.lod)?;
     Ok(Scene {
         sun: build_sun(&cx, raw.sun)?,
         sky: build_sky(&cx, raw.sky)?,
@@ -258,9 +286,71 @@ pub(crate) fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> 
         terrain,
         species,
         trees,
-        lod_chain: raw.lod.map(|l| l.chain).unwrap_or_default(),
+        lod_chain,
+        lod_bands,
+        technique_params,
         source: Some(path.to_path_buf()),
     })
+}
+
+/// The settings of one parameter table for technique `name` (keys and values are checked
+/// against the technique's schema by the renderer, which knows the techniques).
+fn settings(cx: &Ctx, name: &str, table: &RawParams) -> Result<Vec<Setting>, SceneError> {
+    table
+        .iter()
+        .map(|(key, v)| {
+            let value = ParamValue::from_toml(v.get_ref()).map_err(|why| {
+                cx.invalid(
+                    &v.span(),
+                    format!("[technique.{name}] {key}: {why}"),
+                    "give a number, a boolean, a string or an array",
+                )
+            })?;
+            Ok(Setting {
+                technique: name.to_string(),
+                key: key.clone(),
+                value,
+                origin: Origin::File(cx.loc(&v.span())),
+            })
+        })
+        .collect()
+}
+
+/// `[lod] chain = [...]` (strings, parsed by the renderer) or `[[lod.band]]` tables.
+fn build_lod(cx: &Ctx, raw: Option<RawLod>) -> Result<(Vec<String>, Vec<LodBand>), SceneError> {
+    let Some(raw) = raw else {
+        return Ok((Vec::new(), Vec::new()));
+    };
+    if let (false, Some(b)) = (raw.chain.is_empty(), raw.band.first()) {
+        return Err(cx.invalid(
+            &b.span(),
+            "[lod] has both `chain` and `[[lod.band]]` tables",
+            "keep one of them",
+        ));
+    }
+    let mut bands = Vec::with_capacity(raw.band.len());
+    for b in &raw.band {
+        let span = b.span();
+        let b = b.get_ref();
+        let technique = cx.non_empty(&b.technique, "technique")?.to_string();
+        let from = *b.from.get_ref();
+        let to = b.to.as_ref().map_or(f32::INFINITY, |t| *t.get_ref());
+        if !(from.is_finite() && from >= 0.0 && to > from) {
+            return Err(cx.invalid(
+                &b.from.span(),
+                format!("[[lod.band]] {technique}: from = {from}, to = {to}"),
+                "give 0 ≤ from < to (leave `to` out for an open end)",
+            ));
+        }
+        bands.push(LodBand {
+            params: settings(cx, &technique, &b.params)?,
+            technique,
+            from,
+            to,
+            origin: Origin::File(cx.loc(&span)),
+        });
+    }
+    Ok((raw.chain, bands))
 }
 
 fn check_size(cx: &Ctx, s: &Spanned<Size2>) -> Result<[f32; 2], SceneError> {

@@ -13,6 +13,7 @@ mod error;
 mod file;
 mod heightmap;
 mod noise;
+mod params;
 mod path;
 mod placement;
 mod rng;
@@ -24,6 +25,7 @@ pub use csv::{MAX_CSV_BYTES, MAX_CSV_ROWS};
 pub use default::{BUILTIN_SIZE_M, DEFAULT_SUN_COLOR, preset_height_m};
 pub use error::{ErrorKind, Location, SceneError, line_col};
 pub use heightmap::MAX_IMAGE_DIM;
+pub use params::{LodBand, Origin, ParamValue, Setting};
 pub use path::{CameraKey, CameraPath, Interpolation};
 pub use placement::{
     DEFAULT_DENSITY_PER_HA, Density, DensityMap, MAX_DENSITY_PER_HA, MAX_PATTERN_POINTS, MAX_TREES,

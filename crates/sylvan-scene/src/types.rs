@@ -23,6 +23,11 @@ pub struct Scene {
     pub camera: Camera,
     /// The `[lod] chain` entries as written (e.g. `"geometry:0-60"`); empty when absent.
     pub lod_chain: Vec<String>,
+    /// The LOD chain as `[[lod.band]]` tables, each with its own parameters; empty when absent
+    /// (a scene has `lod_chain` or `lod_bands`, not both).
+    pub lod_bands: Vec<crate::params::LodBand>,
+    /// Every `[technique.NAME]` table's settings, in file order.
+    pub technique_params: Vec<crate::params::Setting>,
     /// The file the scene came from (`None` for the built-in scene).
     pub source: Option<PathBuf>,
 }

@@ -1,4 +1,4 @@
-//! The `sylvan` command line: `plant`, `bake`, `render`, `bench`, `compare`, `view`.
+//! The `sylvan` command line: `plant`, `bake`, `render`, `bench`, `compare`, `view`, `params`.
 //!
 //! The binary is thin: each subcommand parses its flags into a validated configuration and calls
 //! the libraries. Errors print once, on one line, as `error: FILE:LINE:COL: what — fix` where a
@@ -31,6 +31,8 @@ enum Command {
     Compare(cmd::compare::CompareArgs),
     /// Open the interactive viewer (or, with --frames N, run N frames and exit).
     View(cmd::view::ViewerArgs),
+    /// List technique parameters: default, unit, bake or draw, and what each does.
+    Params(cmd::params::ParamsArgs),
     /// Print the GPU adapter Sylvan would use; fails with an install hint when there is none.
     Adapter,
 }
@@ -52,6 +54,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => cmd::bench::run(args),
         Command::Compare(args) => cmd::compare::run(args),
         Command::View(args) => cmd::view::run(args),
+        Command::Params(args) => cmd::params::run(args),
         Command::Adapter => sylvan_gpu::Gpu::new().map_err(Into::into).map(|gpu| {
             let ts = if gpu.timestamps {
                 "GPU timestamps"

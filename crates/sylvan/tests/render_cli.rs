@@ -212,6 +212,28 @@ fn bad_scene_files_give_file_line_col() {
             TINY.replace("stand.csv", "bad.csv"),
             vec!["bad.csv:3:"],
         ),
+        (
+            "badparam.toml",
+            format!("{TINY}\n[technique.hbt]\nlevels = \"x\"\n"),
+            vec!["badparam.toml:17:10", "hbt.levels", "—"],
+        ),
+        (
+            "typo.toml",
+            format!("{TINY}\n[technique.hbt]\nopen_texel_pixel = 2\n"),
+            vec!["typo.toml:17:20", "open_texel_pixels", "—"],
+        ),
+        (
+            "nosuch.toml",
+            format!("{TINY}\n[technique.nerf]\nsize = 2\n"),
+            vec!["nosuch.toml:17:8", "unknown technique `nerf`", "—"],
+        ),
+        (
+            "badband.toml",
+            format!(
+                "{TINY}\n[[lod.band]]\ntechnique = \"geometry\"\nfrom = 0\n[lod.band.params]\nsize = 2\n"
+            ),
+            vec!["badband.toml:20:8", "geometry.size", "—"],
+        ),
     ];
     std::fs::write(dir.join("notes.txt"), "this is not an image").unwrap();
     std::fs::write(dir.join("bad.csv"), "x,y\n10,10\n12,abc\n").unwrap();
@@ -313,12 +335,27 @@ fn bad_bake_input_is_one_error_line() {
     let dir = workdir("bake_bad");
     for (args, needles) in [
         (
-            vec!["bake", "--preset", "bush", "--tile", "100", "--no-cache"],
-            vec!["tile 100", "—"],
+            vec![
+                "bake",
+                "--preset",
+                "bush",
+                "--set",
+                "boxtree.tile=100",
+                "--no-cache",
+            ],
+            vec!["--set boxtree.tile=100", "tile 100", "—"],
         ),
         (
-            vec!["bake", "--preset", "bush", "--planes", "round"],
-            vec!["--planes round"],
+            vec!["bake", "--preset", "bush", "--set", "boxtree.layout=round"],
+            vec!["--set boxtree.layout=round", "unknown variant", "—"],
+        ),
+        (
+            vec!["render", "--set", "hbt.open_texel_pixel=2"],
+            vec!["--set hbt.open_texel_pixel=2", "hbt.open_texel_pixels", "—"],
+        ),
+        (
+            vec!["render", "--set", "hbt.levels"],
+            vec!["--set hbt.levels", "no '='", "—"],
         ),
         (
             vec!["bake", "--preset", "bush", "--technique", "geometry"],
@@ -329,4 +366,95 @@ fn bad_bake_input_is_one_error_line() {
     ] {
         assert_one_line_error(&sylvan(&args, &dir), &needles);
     }
+}
+
+#[test]
+fn params_lists_every_key_of_every_technique() {
+    let dir = workdir("params");
+    let out = sylvan(&["params"], &dir);
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    for needle in [
+        "geometry —",
+        "boxtree —",
+        "hbt —",
+        "auto —",
+        "open_texel_pixels = 2.0",
+        "draw [px]",
+        "tile = 64",
+        "layout = \"axis\"",
+    ] {
+        assert!(text.contains(needle), "'{needle}' missing from: {text}");
+    }
+    let json = sylvan(&["params", "hbt", "--json"], &dir);
+    let v = json_of(&json);
+    let keys: Vec<&str> = v["hbt"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["key"].as_str().unwrap())
+        .collect();
+    assert!(
+        keys.contains(&"levels") && keys.contains(&"views"),
+        "{keys:?}"
+    );
+    assert_one_line_error(
+        &sylvan(&["params", "nerf"], &dir),
+        &["unknown technique 'nerf'"],
+    );
+}
+
+#[test]
+fn band_tables_and_set_reach_the_technique() {
+    // A chain written as [[lod.band]] tables with their own parameters renders, and `--set`
+    // changes what a technique draws (boxtree opening every box: more triangles).
+    let dir = workdir("bands");
+    tiny_scene(&dir);
+    let scene = format!(
+        "{TINY}\n[[lod.band]]\ntechnique = \"geometry\"\nfrom = 0\nto = 10\n[[lod.band]]\ntechnique = \"boxtree\"\nfrom = 10\nparams = {{ texel_pixels = 4 }}\n"
+    );
+    std::fs::write(dir.join("bands.toml"), scene).unwrap();
+    let cache = dir.join("cache");
+    let c = cache.to_str().unwrap();
+    let render = |extra: &[&str]| {
+        let stats = dir.join("s.json");
+        let mut args = vec![
+            "render",
+            "bands.toml",
+            "--technique",
+            "auto",
+            "--size",
+            "64x36",
+            "--cache-dir",
+            c,
+            "--out",
+            "b.png",
+            "--stats",
+            stats.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let out = sylvan(&args, &dir);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice::<serde_json::Value>(&std::fs::read(&stats).unwrap()).unwrap()
+    };
+    let banded = render(&[]);
+    let n: u64 = banded["trees_drawn"]
+        .as_object()
+        .unwrap()
+        .values()
+        .map(|v| v.as_u64().unwrap())
+        .sum();
+    assert!(n >= 3, "{banded}");
+    let closed = render(&["--set", "boxtree.texel_pixels=60"]);
+    let opened = render(&["--set", "boxtree.texel_pixels=0.1"]);
+    assert!(
+        opened["triangles"].as_u64() > closed["triangles"].as_u64(),
+        "opened {} vs closed {}",
+        opened["triangles"],
+        closed["triangles"]
+    );
 }

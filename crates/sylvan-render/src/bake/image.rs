@@ -33,6 +33,53 @@ pub struct TileLevel {
     pub normal: Vec<u8>,
 }
 
+impl TileLevel {
+    /// Writes a tile's mip chain (as [`TileLevel::decode_chain`] reads it back).
+    pub fn encode_chain(e: &mut super::codec::Encoder, levels: &[TileLevel]) {
+        e.u64(levels.len() as u64);
+        for l in levels {
+            e.u32(l.size);
+            e.bytes(&l.color);
+            e.bytes(&l.normal);
+        }
+    }
+
+    /// Reads a full mip chain of a `tile`-texel tile, checking the level count and every
+    /// level's size and byte lengths.
+    pub fn decode_chain(
+        d: &mut super::codec::Decoder<'_>,
+        tile: u32,
+    ) -> Result<Vec<TileLevel>, super::codec::DecodeError> {
+        let bad = |m: String| super::codec::DecodeError(m);
+        if tile == 0 || !tile.is_power_of_two() {
+            return Err(bad(format!("tile size {tile} is not a power of two")));
+        }
+        let nlev = d.u64()?;
+        if nlev != tile.ilog2() as u64 + 1 {
+            return Err(bad(format!("{nlev} mip levels for a {tile}-texel tile")));
+        }
+        let mut levels = Vec::with_capacity(nlev as usize);
+        for m in 0..nlev as u32 {
+            let size = d.u32()?;
+            let color = d.bytes()?.to_vec();
+            let normal = d.bytes()?.to_vec();
+            let want = (tile >> m).max(1);
+            if size != want
+                || color.len() != (size * size * 4) as usize
+                || normal.len() != color.len()
+            {
+                return Err(bad(format!("mip {m} has the wrong size")));
+            }
+            levels.push(TileLevel {
+                size,
+                color,
+                normal,
+            });
+        }
+        Ok(levels)
+    }
+}
+
 impl TileImage {
     /// Coverage: the mean alpha.
     pub fn coverage(&self) -> f32 {

@@ -359,21 +359,112 @@ pub struct BakeReport {
     pub bytes: u64,
 }
 
-/// Returns `R`'s baked asset for `plant`: from the cache when a file with the same inputs
+/// The offline half of a technique: one plant → one asset, a pure function of the plant and
+/// the bake parameters, cached on disk by [`load_or_bake`]. The cache key is the hash of the
+/// parameters' canonical serialisation (every field, none picked by hand), the plant's whole
+/// content ([`plant_hash`]) and the format versions.
+pub trait Bake {
+    /// The technique's name (the cache file names it).
+    const NAME: &'static str;
+    /// Version of the payload; bump when [`Bake::encode`]'s output or the bake's result changes.
+    const FORMAT_VERSION: u32;
+    /// Everything the bake depends on besides the plant.
+    type Params: crate::technique::params::ParamTable;
+    /// One plant's baked asset.
+    type Asset: Clone;
+    /// Bakes one plant; `progress(done, total)` reports work units as they complete.
+    fn bake(
+        gpu: &Gpu,
+        plant: &Plant,
+        params: &Self::Params,
+        progress: &mut dyn FnMut(usize, usize),
+    ) -> Result<Self::Asset, RenderError>;
+    /// Serialises an asset.
+    fn encode(asset: &Self::Asset) -> Vec<u8>;
+    /// Reads an asset back (every length and range checked).
+    fn decode(bytes: &[u8]) -> Result<Self::Asset, codec::DecodeError>;
+}
+
+/// The cache key of `B`'s asset for `plant`: name, versions, the canonical JSON of `params`
+/// (struct field order, so every field counts) and [`plant_hash`].
+pub fn cache_key<B: Bake>(plant: &Plant, params: &B::Params) -> u64 {
+    let canonical = serde_json::to_vec(params).unwrap_or_default();
+    let mut h = codec::Fnv64::default();
+    h.field(B::NAME.as_bytes())
+        .u32s(&[B::FORMAT_VERSION, cache::CONTAINER_VERSION])
+        .field(&canonical)
+        .write(&plant_hash(plant).to_le_bytes());
+    h.finish()
+}
+
+/// Content hash of everything in a plant a bake may read: meshes, leaf texture, bounds, the
+/// branch hierarchy and the instancing (not its name).
+pub fn plant_hash(plant: &Plant) -> u64 {
+    fn mesh(h: &mut codec::Fnv64, m: &sylvan_plant::Mesh) {
+        h.f32s(bytemuck::cast_slice(&m.positions))
+            .f32s(bytemuck::cast_slice(&m.normals))
+            .f32s(bytemuck::cast_slice(&m.uvs))
+            .f32s(bytemuck::cast_slice(&m.colors))
+            .u32s(&m.indices);
+    }
+    let mut h = codec::Fnv64::default();
+    mesh(&mut h, &plant.wood);
+    mesh(&mut h, &plant.leaves);
+    let t = &plant.leaf_texture;
+    h.u32s(&[t.width, t.height]).field(&t.rgba);
+    h.f32s(&plant.bbox_min).f32s(&plant.bbox_max);
+    let hier = &plant.hierarchy;
+    h.u32s(&[hier.nodes.len() as u32])
+        .u32s(&hier.leaf_first_index);
+    for n in &hier.nodes {
+        h.u32s(&[
+            n.parent.unwrap_or(u32::MAX),
+            n.level,
+            n.leaves.start,
+            n.leaves.end,
+            n.own_leaves,
+            n.own_internodes,
+            n.leaf_indices.start,
+            n.leaf_indices.end,
+            n.wood_indices.start,
+            n.wood_indices.end,
+        ])
+        .u32s(&n.children)
+        .f32s(&n.bbox_min)
+        .f32s(&n.bbox_max);
+    }
+    let inst = &plant.instancing;
+    h.u32s(&[inst.root, inst.objects.len() as u32]);
+    for o in &inst.objects {
+        h.u32s(&[o.level, o.uses, o.instances.len() as u32]);
+        mesh(&mut h, &o.wood);
+        mesh(&mut h, &o.leaves);
+        for i in &o.instances {
+            h.u32s(&[i.object]).f32s(&i.transform.to_cols_array());
+        }
+    }
+    h.finish()
+}
+
+/// Returns `B`'s baked asset for `plant`: from the cache when a file with the same inputs
 /// exists, else baked on the GPU and written atomically. A stale, truncated or corrupt file is
 /// reported in [`BakeReport::stale`] and replaced. `progress(done, total)` follows the bake.
-pub fn load_or_bake<R: crate::technique::Representation>(
+pub fn load_or_bake<B: Bake>(
     gpu: &Gpu,
     plant: &Plant,
-    params: &R::Params,
+    params: &B::Params,
     policy: &CachePolicy,
     progress: &mut dyn FnMut(usize, usize),
-) -> Result<(R::Baked, BakeReport), RenderError> {
+) -> Result<(B::Asset, BakeReport), RenderError> {
+    use crate::technique::params::ParamTable;
+    params
+        .validate()
+        .map_err(|why| RenderError::Param(format!("{}: {why}", B::NAME)))?;
     let start = std::time::Instant::now();
     let key = cache::CacheKey {
-        technique: R::NAME.to_string(),
-        format_version: R::FORMAT_VERSION,
-        hash: R::input_hash(plant, params),
+        technique: B::NAME.to_string(),
+        format_version: B::FORMAT_VERSION,
+        hash: cache_key::<B>(plant, params),
     };
     let path = match policy {
         CachePolicy::Default => {
@@ -386,7 +477,7 @@ pub fn load_or_bake<R: crate::technique::Representation>(
     let mut stale = None;
     if let Some(p) = &path {
         match cache::read(p, &key) {
-            cache::Lookup::Hit(payload) => match R::decode(&payload) {
+            cache::Lookup::Hit(payload) => match B::decode(&payload) {
                 Ok(baked) => {
                     return Ok((
                         baked,
@@ -406,8 +497,8 @@ pub fn load_or_bake<R: crate::technique::Representation>(
             cache::Lookup::Stale(why) => stale = Some(why),
         }
     }
-    let baked = R::bake(gpu, plant, params, progress)?;
-    let payload = R::encode(&baked);
+    let baked = B::bake(gpu, plant, params, progress)?;
+    let payload = B::encode(&baked);
     if let Some(p) = &path {
         cache::write(p, &key, &payload).map_err(|e| {
             RenderError::Option(format!(

@@ -23,10 +23,7 @@ impl PlaneFrame {
     /// box's orthographic projection tightly. `v` is world up projected into the plane (or +Z
     /// for horizontal planes); `u = v × f`, so the image is not mirrored when seen from `+f`.
     pub fn for_box(normal: Vec3, min: Vec3, max: Vec3) -> Self {
-        let f = normal.normalize();
-        let up = if f.y.abs() < 0.99 { Vec3::Y } else { Vec3::Z };
-        let v = (up - f * up.dot(f)).normalize();
-        let u = v.cross(f);
+        let (u, v, f) = image_axes(normal);
         let h = ((max - min) * 0.5).max(Vec3::ZERO);
         let extent = |a: Vec3| (a.abs() * h).element_sum().max(1e-3);
         Self {
@@ -35,6 +32,20 @@ impl PlaneFrame {
             v,
             f,
             half: Vec3::new(extent(u), extent(v), extent(f)),
+        }
+    }
+
+    /// A square frame with normal `normal` enclosing the sphere of `radius` about `centre`:
+    /// every direction's view of the sphere gets the same image scale and depth range (the
+    /// image axes are those of [`PlaneFrame::for_box`]).
+    pub fn for_sphere(normal: Vec3, centre: Vec3, radius: f32) -> Self {
+        let (u, v, f) = image_axes(normal);
+        Self {
+            centre,
+            u,
+            v,
+            f,
+            half: Vec3::splat(radius.max(1e-3)),
         }
     }
 
@@ -62,8 +73,18 @@ impl PlaneFrame {
     }
 }
 
+/// Image axes `(u, v, f)` of a plane with normal `normal`: `v` is world up projected into the
+/// plane (or +Z for near-horizontal planes), `u = v × f`.
+fn image_axes(normal: Vec3) -> (Vec3, Vec3, Vec3) {
+    let f = normal.normalize();
+    let up = if f.y.abs() < 0.99 { Vec3::Y } else { Vec3::Z };
+    let v = (up - f * up.dot(f)).normalize();
+    (v.cross(f), v, f)
+}
+
 /// Plane normals of LCV04's two arrangements.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum PlaneLayout {
     /// Fig. 3: three axis-aligned planes through the box centre, an image per side (6 images).
     Axis,

@@ -124,18 +124,8 @@ fn hash13(p: vec3<f32>) -> f32 {
 const DEBUG_TECHNIQUE: u32 = 1u;
 const DEBUG_CASCADES: u32 = 2u;
 
-// One colour per technique, by its index in `TechniqueKind::ALL` (geometry = 0).
-fn technique_color(technique: i32) -> vec3<f32> {
-    switch technique {
-        case 0: { return vec3<f32>(1.0, 0.45, 0.05); }   // geometry: orange
-        case 1: { return vec3<f32>(0.1, 0.5, 1.0); }     // boxtree: blue
-        case 2: { return vec3<f32>(0.9, 0.1, 0.9); }     // hbt: magenta
-        case 3: { return vec3<f32>(1.0, 0.9, 0.1); }     // billboard-cloud: yellow
-        case 4: { return vec3<f32>(0.1, 0.9, 0.9); }     // zfield: cyan
-        case 5: { return vec3<f32>(1.0, 0.1, 0.1); }     // shadermap: red
-        default: { return vec3<f32>(1.0, 1.0, 1.0); }
-    }
-}
+// `technique_color(id)` and the `TECHNIQUE_<NAME>` ids are generated from the technique
+// registry and prepended to this file (`registry::wgsl_prelude`).
 
 fn cascade_color(cascade: u32) -> vec3<f32> {
     switch cascade {
@@ -148,7 +138,7 @@ fn cascade_color(cascade: u32) -> vec3<f32> {
 }
 
 // Applies the frame's debug view to a shaded colour at `world`. `technique` is the drawing
-// technique's index in `TechniqueKind::ALL`, or -1 for terrain (drawn grey in the technique view).
+// technique's id (`TECHNIQUE_<NAME>`, from the registry), or -1 for terrain (drawn grey in the technique view).
 fn debug_tint(color: vec3<f32>, world: vec3<f32>, technique: i32) -> vec3<f32> {
     let mode = u32(frame.shadow_params.z + 0.5);
     let luma = dot(color, vec3<f32>(0.2126, 0.7152, 0.0722));

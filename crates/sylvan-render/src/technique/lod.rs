@@ -4,13 +4,22 @@
 //! near one's falls, so no tree pops). Bands come from the scene's `[lod] chain`, e.g.
 //! `["geometry:0-60", "boxtree:60-"]`; without one, [`DEFAULT_CHAIN`].
 //!
+//! Bands can also be `[[lod.band]]` tables, each with its own parameters
+//! (`params = { open_texel_pixels = 3 }`), applied over the scene's `[technique.NAME]` tables
+//! and under `--set`.
+//!
 //! Each band keeps its own instance list, refilled from the frame's culled instances every
-//! frame (no allocation), and its technique is prepared once like a stand-alone one.
+//! frame (no allocation), and its technique is built once like a stand-alone one, from the
+//! registry.
 
+use super::params::{self, NoParams};
+use super::registry::{self, Entry, Kind};
+use super::{BandRange, BuildContext, Built, DrawContext, DrawCounts, FrameInput, Technique};
 use crate::RenderError;
 use crate::instances::{GpuTreeInstance, Instances};
-use crate::technique::TechniqueKind;
 use glam::Vec3;
+use sylvan_gpu::Gpu;
+use sylvan_scene::{LodBand, Setting};
 
 /// The chain used when a scene has no `[lod] chain`.
 pub const DEFAULT_CHAIN: [&str; 2] = ["geometry:0-40", "boxtree:40-"];
@@ -18,26 +27,99 @@ pub const DEFAULT_CHAIN: [&str; 2] = ["geometry:0-40", "boxtree:40-"];
 /// Half-width of the cross-fade at a band boundary, relative to the boundary distance.
 pub const FADE: f32 = 0.1;
 
-/// Techniques a chain may use in this build.
-pub const CHAIN_TECHNIQUES: [TechniqueKind; 3] = [
-    TechniqueKind::Geometry,
-    TechniqueKind::BoxTree,
-    TechniqueKind::Hbt,
-];
-
 /// One band of the chain, parsed.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Band {
-    /// The technique drawing this band.
-    pub technique: TechniqueKind,
+    /// The technique drawing this band (a registry name).
+    pub technique: &'static str,
     /// Start distance (metres).
     pub start: f32,
     /// End distance (metres, `f32::INFINITY` for an open end).
     pub end: f32,
+    /// The band's own settings (from its `[[lod.band]]` table).
+    pub settings: Vec<Setting>,
+    /// Where the band was written, for messages (`[lod] chain entry '…'` or `FILE:LINE:COL`).
+    pub place: String,
+}
+
+/// The registry entry of a chain member, refusing what cannot be a band.
+fn member(name: &str, place: &str) -> Result<&'static str, RenderError> {
+    let e =
+        registry::find(name.trim()).map_err(|e| RenderError::Option(format!("{place}: {e}")))?;
+    if e.kind == Kind::Chain {
+        return Err(RenderError::Option(format!(
+            "{place}: '{}' cannot be a band of the chain — use one of: {}",
+            e.name,
+            chainable().join(", ")
+        )));
+    }
+    Ok(e.name)
+}
+
+/// Techniques a chain may use.
+pub fn chainable() -> Vec<&'static str> {
+    registry::REGISTRY
+        .iter()
+        .filter(|e| e.kind != Kind::Chain)
+        .map(|e| e.name)
+        .collect()
+}
+
+/// Checks that `bands` are contiguous, start at 0 and end open.
+fn check_bands(bands: &[Band]) -> Result<(), RenderError> {
+    for (i, b) in bands.iter().enumerate() {
+        let bad = |why: String| RenderError::Option(format!("{}: {why}", b.place));
+        if !(b.start.is_finite() && b.start >= 0.0 && b.end > b.start) {
+            return Err(bad(
+                "distances must satisfy 0 ≤ START < END — fix the band's distances".into(),
+            ));
+        }
+        match i.checked_sub(1).map(|p| &bands[p]) {
+            Some(prev) if prev.end != b.start => {
+                return Err(bad(format!(
+                    "the previous band ends at {}, this one starts at {} — make the bands contiguous",
+                    prev.end, b.start
+                )));
+            }
+            None if b.start != 0.0 => {
+                return Err(bad("the first band must start at 0 — start it at 0".into()));
+            }
+            _ => {}
+        }
+    }
+    match bands.last() {
+        Some(b) if b.end.is_finite() => Err(RenderError::Option(format!(
+            "{}: the last band must be open-ended so far trees are drawn — leave its end out",
+            b.place
+        ))),
+        None => Err(RenderError::Option(
+            "the LOD chain has no bands — give [lod] chain or [[lod.band]] tables".into(),
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// Bands from `[[lod.band]]` tables.
+pub fn from_tables(tables: &[LodBand]) -> Result<Vec<Band>, RenderError> {
+    let bands = tables
+        .iter()
+        .map(|t| {
+            let place = format!("{} [[lod.band]] {}", t.origin, t.technique);
+            Ok(Band {
+                technique: member(&t.technique, &place)?,
+                start: t.from,
+                end: t.to,
+                settings: t.params.clone(),
+                place,
+            })
+        })
+        .collect::<Result<Vec<_>, RenderError>>()?;
+    check_bands(&bands)?;
+    Ok(bands)
 }
 
 /// Parses `[lod] chain` entries (`"name:start-end"`, end may be empty): bands must be
-/// contiguous, start at 0, end open, and use techniques this build implements.
+/// contiguous, start at 0, end open, and name registered techniques other than `auto`.
 pub fn parse_chain(entries: &[String]) -> Result<Vec<Band>, RenderError> {
     let default: Vec<String> = DEFAULT_CHAIN.iter().map(|s| s.to_string()).collect();
     let entries = if entries.is_empty() {
@@ -47,19 +129,14 @@ pub fn parse_chain(entries: &[String]) -> Result<Vec<Band>, RenderError> {
     };
     let mut bands: Vec<Band> = Vec::with_capacity(entries.len());
     for e in entries {
+        let place = format!("[lod] chain entry '{e}'");
         let bad = |why: &str| {
             RenderError::Option(format!(
-                "[lod] chain entry '{e}': {why} — write entries as \"technique:START-END\", e.g. \"boxtree:60-\""
+                "{place}: {why} — write entries as \"technique:START-END\", e.g. \"boxtree:60-\""
             ))
         };
         let (name, range) = e.split_once(':').ok_or_else(|| bad("no ':'"))?;
-        let technique = TechniqueKind::parse(name.trim())?;
-        if !CHAIN_TECHNIQUES.contains(&technique) {
-            return Err(RenderError::Option(format!(
-                "[lod] chain entry '{e}': technique '{}' is not implemented yet — use geometry, boxtree or hbt in the chain",
-                technique.name()
-            )));
-        }
+        let technique = member(name, &place)?;
         let (a, b) = range
             .split_once('-')
             .ok_or_else(|| bad("no '-' between the distances"))?;
@@ -74,31 +151,15 @@ pub fn parse_chain(entries: &[String]) -> Result<Vec<Band>, RenderError> {
                 .parse()
                 .map_err(|_| bad("the end is not a number"))?
         };
-        if !(start.is_finite() && start >= 0.0 && end > start) {
-            return Err(bad("distances must satisfy 0 ≤ START < END"));
-        }
-        match bands.last() {
-            Some(prev) if prev.end != start => {
-                return Err(bad(&format!(
-                    "the previous band ends at {}, this one starts at {start}",
-                    prev.end
-                )));
-            }
-            None if start != 0.0 => return Err(bad("the first band must start at 0")),
-            _ => {}
-        }
         bands.push(Band {
             technique,
             start,
             end,
+            settings: Vec::new(),
+            place,
         });
     }
-    if bands.last().is_some_and(|b| b.end.is_finite()) {
-        let last = entries.last().map(String::as_str).unwrap_or("");
-        return Err(RenderError::Option(format!(
-            "[lod] chain entry '{last}': the last band must be open-ended so far trees are drawn — end it with '-', e.g. \"boxtree:60-\""
-        )));
-    }
+    check_bands(&bands)?;
     Ok(bands)
 }
 
@@ -137,6 +198,174 @@ pub(crate) fn split(
             let d = Vec3::new(r.base_scale[0], r.base_scale[1], r.base_scale[2]).distance(eye);
             presence(bands, i, d)
         });
+    }
+}
+
+/// The registry entry of `auto`.
+pub const ENTRY: Entry = Entry {
+    name: "auto",
+    kind: Kind::Chain,
+    summary: "the LOD chain: a technique per distance band ([lod] chain or [[lod.band]]), cross-faded",
+    debug_color: [1.0, 1.0, 1.0],
+    schema: params::schema::<NoParams, NoParams>,
+    check: |s| params::resolve::<NoParams, NoParams>("auto", s).map(|_| ()),
+    build: |cx| Chain::build(cx),
+    bake: None,
+    shaders: Vec::new,
+};
+
+/// The `auto` chain: a technique and an instance list per band.
+pub struct Chain {
+    bands: Vec<Band>,
+    techniques: Vec<Box<dyn Technique>>,
+    lists: Vec<Instances>,
+}
+
+impl Chain {
+    /// Builds each band's technique with its settings: the scene's `[technique.NAME]` tables,
+    /// then the band's own, then the command line's.
+    fn build(cx: &mut BuildContext<'_>) -> Result<Built, RenderError> {
+        params::resolve::<NoParams, NoParams>("auto", &cx.settings_for("auto"))?;
+        let bands = if cx.scene.lod_bands.is_empty() {
+            parse_chain(&cx.scene.lod_chain)?
+        } else {
+            from_tables(&cx.scene.lod_bands)?
+        };
+        let mut techniques = Vec::with_capacity(bands.len());
+        let mut reports = Vec::new();
+        let mut lists = Vec::with_capacity(bands.len());
+        for band in &bands {
+            let settings: Vec<Setting> = cx
+                .scene
+                .technique_params
+                .iter()
+                .chain(&band.settings)
+                .chain(cx.overrides)
+                .cloned()
+                .collect();
+            let mut sub = BuildContext {
+                gpu: cx.gpu,
+                frame: cx.frame,
+                scene: cx.scene,
+                plants: cx.plants,
+                population: cx.population,
+                band: BandRange {
+                    start: band.start,
+                    end: band.end,
+                },
+                settings: &settings,
+                overrides: cx.overrides,
+                policy: cx.policy,
+                progress: &mut *cx.progress,
+            };
+            let entry = registry::find(band.technique)?;
+            let built = (entry.build)(&mut sub)?;
+            techniques.push(built.technique);
+            reports.extend(built.reports);
+            lists.push(Instances::derived(
+                cx.gpu,
+                cx.population.capacity(),
+                cx.population.species_count(),
+            ));
+        }
+        Ok(Built {
+            technique: Box::new(Self {
+                bands,
+                techniques,
+                lists,
+            }),
+            reports,
+        })
+    }
+}
+
+impl Technique for Chain {
+    fn name(&self) -> &'static str {
+        ENTRY.name
+    }
+
+    fn prepare_frame(
+        &mut self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        input: &FrameInput<'_>,
+    ) -> Result<(), RenderError> {
+        split(
+            gpu,
+            &self.bands,
+            &mut self.lists,
+            input.instances,
+            input.eye,
+        );
+        for (t, list) in self.techniques.iter_mut().zip(&self.lists) {
+            let sub = FrameInput {
+                instances: list,
+                ..*input
+            };
+            t.prepare_frame(gpu, encoder, &sub)?;
+        }
+        Ok(())
+    }
+
+    fn draw(&self, pass: &mut wgpu::RenderPass<'_>, ctx: &DrawContext<'_>) -> DrawCounts {
+        let mut counts = DrawCounts::default();
+        for (t, list) in self.techniques.iter().zip(&self.lists) {
+            let sub = DrawContext {
+                pass: ctx.pass,
+                frame_bind: ctx.frame_bind,
+                instances: list,
+                ranges: &list.ranges[ctx.pass],
+            };
+            counts += t.draw(pass, &sub);
+        }
+        counts
+    }
+
+    fn bytes(&self) -> u64 {
+        self.techniques.iter().map(|t| t.bytes()).sum::<u64>()
+            + self.lists.iter().map(|l| l.buffer().size()).sum::<u64>()
+    }
+
+    fn trees_drawn(&self, _: &Instances) -> Vec<(&'static str, u32)> {
+        let mut out: Vec<(&'static str, u32)> = Vec::new();
+        for (t, list) in self.techniques.iter().zip(&self.lists) {
+            for (name, n) in t.trees_drawn(list) {
+                match out.iter_mut().find(|(m, _)| *m == name) {
+                    Some(e) => e.1 += n,
+                    None => out.push((name, n)),
+                }
+            }
+        }
+        out
+    }
+
+    /// Each band technique's statistics, bands of the same technique summed.
+    fn stats_by_technique(&self) -> Vec<(&'static str, Vec<(&'static str, f64)>)> {
+        let mut out: Vec<(&'static str, Vec<(&'static str, f64)>)> = Vec::new();
+        for t in &self.techniques {
+            for (name, stats) in t.stats_by_technique() {
+                match out.iter_mut().find(|(m, _)| *m == name) {
+                    Some((_, acc)) => {
+                        for (k, v) in stats {
+                            match acc.iter_mut().find(|(a, _)| *a == k) {
+                                Some(e) => e.1 += v,
+                                None => acc.push((k, v)),
+                            }
+                        }
+                    }
+                    None => out.push((name, stats)),
+                }
+            }
+        }
+        out
+    }
+
+    fn atlas_preview(&self) -> Option<&image::RgbaImage> {
+        self.techniques.iter().find_map(|t| t.atlas_preview())
+    }
+
+    fn reallocations(&self) -> u32 {
+        self.techniques.iter().map(|t| t.reallocations()).sum()
     }
 }
 

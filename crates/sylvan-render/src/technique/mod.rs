@@ -1,77 +1,174 @@
-//! Tree representations, one module per paper, behind one trait.
+//! Tree representations, one folder per technique, behind two traits and one registry.
+//!
+//! - [`crate::bake::Bake`] is the offline half: one plant → one cached asset.
+//! - [`Technique`] is the frame: built once from a [`BuildContext`] (the scene, its terrain,
+//!   the tree population, the band it serves, its settings), then per frame
+//!   [`Technique::prepare_frame`] (may record compute passes into the frame's encoder) and
+//!   [`Technique::draw`] for the camera pass and each shadow cascade.
+//! - [`registry::REGISTRY`] lists every technique once (name, kind, constructor, parameter
+//!   schema); the CLI, the `auto` chain, statistics and shader ids all come from it.
 //!
 //! | `--technique` | module | paper |
 //! |---|---|---|
 //! | `geometry` | [`geometry`] | reference: full meshes, the ground truth |
 //! | `boxtree` | [`boxtree`] | LCV04 |
-//! | `hbt` | [`hbt`] | MNP01 (top level: BTF + reconstruction; no visibility cube-maps yet) |
-//! | `billboard-cloud` | — | GPSS07 (not yet implemented) |
-//! | `zfield` | — | BN12 §5 (not yet implemented) |
-//! | `shadermap` | — | BN12 §6 (not yet implemented) |
+//! | `hbt` | [`hbt`] | MNP01 |
 //! | `auto` | [`lod`] | the LOD chain: a technique per distance band, cross-faded |
+//!
+//! Adding a technique: docs/DESIGN.md, "Adding a technique".
 
-pub(crate) mod any;
 pub mod boxtree;
 pub(crate) mod common;
 pub mod geometry;
 pub mod hbt;
 pub mod lod;
+pub mod params;
+pub mod registry;
 
 use crate::RenderError;
-use crate::bake::codec::DecodeError;
+use crate::bake::{BakeReport, CachePolicy};
 use crate::frame::FrameResources;
 use crate::instances::Instances;
 use std::ops::Range;
 use sylvan_gpu::Gpu;
 use sylvan_plant::Plant;
+use sylvan_scene::{Scene, Setting};
 
-/// A technique name accepted by `--technique`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum TechniqueKind {
-    /// Full geometry (the reference).
-    Geometry,
-    /// LCV04 box-tree impostors.
-    BoxTree,
-    /// MNP01 hierarchical bidirectional textures.
-    Hbt,
-    /// GPSS07 billboard clouds with indirect texturing.
-    BillboardCloud,
-    /// BN12 z-fields.
-    ZField,
-    /// BN12 shader-maps.
-    ShaderMap,
-    /// The LOD chain.
-    Auto,
+pub use registry::{Entry, Kind};
+
+/// Progress of a bake: (plant name, done, total).
+pub type BakeProgress<'a> = &'a mut dyn FnMut(&str, usize, usize);
+
+/// The distance range a technique serves (the `auto` chain's band; `0..∞` alone).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BandRange {
+    /// Start distance (metres).
+    pub start: f32,
+    /// End distance (metres, `f32::INFINITY` for an open end).
+    pub end: f32,
 }
 
-impl TechniqueKind {
-    /// Every technique, in `--technique` spelling.
-    pub const ALL: [(&'static str, TechniqueKind); 7] = [
-        ("geometry", TechniqueKind::Geometry),
-        ("boxtree", TechniqueKind::BoxTree),
-        ("hbt", TechniqueKind::Hbt),
-        ("billboard-cloud", TechniqueKind::BillboardCloud),
-        ("zfield", TechniqueKind::ZField),
-        ("shadermap", TechniqueKind::ShaderMap),
-        ("auto", TechniqueKind::Auto),
-    ];
+impl BandRange {
+    /// Every distance.
+    pub const ALL: Self = Self {
+        start: 0.0,
+        end: f32::INFINITY,
+    };
+}
 
-    /// Parses a `--technique` name; the error lists the valid names.
-    pub fn parse(name: &str) -> Result<Self, RenderError> {
-        Self::ALL
+/// Everything a technique is built from.
+pub struct BuildContext<'a> {
+    /// The device.
+    pub gpu: &'a Gpu,
+    /// Group-0 layouts and the shadow maps.
+    pub frame: &'a FrameResources,
+    /// The scene (terrain, species, sun, …).
+    pub scene: &'a Scene,
+    /// One plant per species.
+    pub plants: &'a [Plant],
+    /// The tree population (every placed tree; per-frame lists are derived from it).
+    pub population: &'a Instances,
+    /// The distance band this technique draws.
+    pub band: BandRange,
+    /// Settings in force (the scene's tables, the band's, `--set`), in the order they apply;
+    /// a technique reads those for its own name ([`BuildContext::settings_for`]).
+    pub settings: &'a [Setting],
+    /// The command line's settings alone (a chain re-applies them over each band's).
+    pub overrides: &'a [Setting],
+    /// Where baked assets are cached.
+    pub policy: &'a CachePolicy,
+    /// Bake progress.
+    pub progress: BakeProgress<'a>,
+}
+
+impl BuildContext<'_> {
+    /// The settings addressed to technique `name`, in order.
+    pub fn settings_for(&self, name: &str) -> Vec<&Setting> {
+        self.settings
             .iter()
-            .find(|(n, _)| *n == name)
-            .map(|(_, k)| *k)
-            .ok_or_else(|| RenderError::UnknownTechnique(name.to_string()))
+            .filter(|s| s.technique == name)
+            .collect()
     }
 
-    /// The `--technique` spelling.
-    pub fn name(self) -> &'static str {
-        Self::ALL
-            .iter()
-            .find(|(_, k)| *k == self)
-            .map(|(n, _)| *n)
-            .unwrap_or("?")
+    /// Bakes (or reads from the cache) `B`'s asset for each plant — once per distinct plant
+    /// and parameters.
+    pub fn load_assets<B: crate::bake::Bake>(
+        &mut self,
+        params: &B::Params,
+    ) -> Result<(Vec<B::Asset>, Vec<BakeReport>), RenderError> {
+        let mut keys: Vec<u64> = Vec::with_capacity(self.plants.len());
+        let mut assets: Vec<B::Asset> = Vec::with_capacity(self.plants.len());
+        let mut reports = Vec::new();
+        for plant in self.plants {
+            let key = crate::bake::cache_key::<B>(plant, params);
+            if let Some(i) = keys.iter().position(|&k| k == key) {
+                assets.push(assets[i].clone());
+                keys.push(key);
+                continue;
+            }
+            let name = plant.name.clone();
+            let progress = &mut self.progress;
+            let (asset, report) = crate::bake::load_or_bake::<B>(
+                self.gpu,
+                plant,
+                params,
+                self.policy,
+                &mut |d, t| progress(&name, d, t),
+            )?;
+            assets.push(asset);
+            keys.push(key);
+            reports.push(report);
+        }
+        Ok((assets, reports))
+    }
+}
+
+/// A technique built by its registry entry, with how its assets were obtained.
+pub struct Built {
+    /// The technique.
+    pub technique: Box<dyn Technique>,
+    /// One report per distinct baked asset.
+    pub reports: Vec<BakeReport>,
+}
+
+/// The frame half of a technique. Object-safe: the renderer holds a `Box<dyn Technique>`.
+/// Per-tree techniques draw the instance lists they are handed; a technique that is a field
+/// over the terrain (BN12's shader-map) ignores them and draws its own geometry in the passes.
+pub trait Technique {
+    /// The registry name.
+    fn name(&self) -> &'static str;
+    /// Per-frame work before any pass: level-of-detail selection, uploads, and compute passes
+    /// recorded into `encoder` (submitted before the frame's render passes).
+    fn prepare_frame(
+        &mut self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        input: &FrameInput<'_>,
+    ) -> Result<(), RenderError>;
+    /// Records one pass: the camera view ([`DrawContext::shadow_cascade`] is `None`) or a
+    /// shadow cascade (depth only).
+    fn draw(&self, pass: &mut wgpu::RenderPass<'_>, ctx: &DrawContext<'_>) -> DrawCounts;
+    /// The technique's own statistics of the last frame, as named values.
+    fn stats(&self) -> Vec<(&'static str, f64)> {
+        Vec::new()
+    }
+    /// GPU memory held (bytes).
+    fn bytes(&self) -> u64;
+    /// Trees drawn in the camera view per technique name (a chain reports each band's).
+    fn trees_drawn(&self, instances: &Instances) -> Vec<(&'static str, u32)> {
+        vec![(self.name(), instances.drawn())]
+    }
+    /// Statistics per technique name (a chain reports each band's technique).
+    fn stats_by_technique(&self) -> Vec<(&'static str, Vec<(&'static str, f64)>)> {
+        vec![(self.name(), self.stats())]
+    }
+    /// A picture of the baked images, for techniques that bake.
+    fn atlas_preview(&self) -> Option<&image::RgbaImage> {
+        None
+    }
+    /// Times a per-frame buffer had to grow so far.
+    fn reallocations(&self) -> u32 {
+        0
     }
 }
 
@@ -120,49 +217,9 @@ impl std::ops::AddAssign for DrawCounts {
     }
 }
 
-/// A tree representation. Offline, [`Representation::bake`] turns one plant into a baked
-/// asset (pure function of the plant and parameters, cached on disk by the shared baker with
-/// [`Representation::encode`] / [`Representation::decode`]); [`Representation::prepare`]
-/// uploads the assets of every species once; per frame, [`Representation::update`] sees the
-/// culled instances and the draw calls record passes from prepared state only.
-pub trait Representation: Sized {
-    /// The `--technique` name.
-    const NAME: &'static str;
-    /// Version of the baked payload; bump when [`Representation::encode`]'s output changes.
-    const FORMAT_VERSION: u32;
-    /// Bake and draw parameters.
-    type Params: Clone + Default + std::fmt::Debug;
-    /// The baked asset of one plant.
-    type Baked: Clone;
-    /// Content hash of every input of [`Representation::bake`] (the cache key).
-    fn input_hash(plant: &Plant, params: &Self::Params) -> u64;
-    /// Bakes one plant; `progress(done, total)` reports work units as they complete.
-    fn bake(
-        gpu: &Gpu,
-        plant: &Plant,
-        params: &Self::Params,
-        progress: &mut dyn FnMut(usize, usize),
-    ) -> Result<Self::Baked, RenderError>;
-    /// Serialises a baked asset.
-    fn encode(baked: &Self::Baked) -> Vec<u8>;
-    /// Reads a baked asset back (every length and range checked).
-    fn decode(bytes: &[u8]) -> Result<Self::Baked, DecodeError>;
-    /// Uploads what the technique needs for `plants` (one per species) and their assets.
-    fn prepare(
-        gpu: &Gpu,
-        frame: &FrameResources,
-        plants: &[Plant],
-        baked: &[Self::Baked],
-        params: &Self::Params,
-    ) -> Result<Self, RenderError>;
-    /// Per-frame work before the passes are recorded (level-of-detail selection, uploads).
-    fn update(&mut self, _gpu: &Gpu, _input: &FrameInput<'_>) -> Result<(), RenderError> {
-        Ok(())
+impl DrawContext<'_> {
+    /// The shadow cascade this pass renders, or `None` for the camera view.
+    pub fn shadow_cascade(&self) -> Option<usize> {
+        self.pass.checked_sub(1)
     }
-    /// Records the main (camera) pass.
-    fn draw(&self, pass: &mut wgpu::RenderPass<'_>, ctx: &DrawContext<'_>) -> DrawCounts;
-    /// Records one shadow cascade pass (depth only).
-    fn draw_shadow(&self, pass: &mut wgpu::RenderPass<'_>, ctx: &DrawContext<'_>) -> DrawCounts;
-    /// GPU memory held (bytes).
-    fn bytes(&self) -> u64;
 }

@@ -154,6 +154,8 @@ pub fn scene(terrain: Terrain, trees: Vec<TreeInstance>, camera: Camera, sun: Su
         },
         camera,
         lod_chain: Vec::new(),
+        lod_bands: Vec::new(),
+        technique_params: Vec::new(),
         source: None,
     }
 }

@@ -65,7 +65,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
     }
     progress.finish_and_clear();
     let mut report = Report::new(
-        r.options.technique.name(),
+        &r.options.technique,
         [r.options.width, r.options.height],
         r.options.spp,
         &frames,

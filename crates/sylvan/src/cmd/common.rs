@@ -4,10 +4,8 @@ use anyhow::{Context, Result, bail};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 use sylvan_render::bake::CachePolicy;
-use sylvan_render::technique::boxtree::{BoxTreeParams, PlaneLayout};
-use sylvan_render::technique::hbt::{HbtParams, HbtProjection, HbtShadows};
-use sylvan_render::{RenderOptions, TechniqueKind};
-use sylvan_scene::{Camera, Scene, Sun};
+use sylvan_render::{RenderOptions, registry};
+use sylvan_scene::{Camera, Scene, Setting, Sun};
 
 /// Scene and view flags common to the frame commands.
 #[derive(clap::Args, Debug, Clone)]
@@ -17,7 +15,8 @@ pub struct ViewArgs {
     /// Output size in pixels, WIDTHxHEIGHT.
     #[arg(long, default_value = "1280x720")]
     pub size: String,
-    /// Tree representation: geometry, boxtree, hbt, billboard-cloud, zfield, shadermap, auto.
+    /// Tree representation: a registered technique (`sylvan params` lists them), or `auto`
+    /// for the scene's LOD chain.
     #[arg(long, default_value = "geometry")]
     pub technique: String,
     /// Samples per pixel (a perfect square; the reference uses 16).
@@ -39,193 +38,31 @@ pub struct ViewArgs {
     pub bake: BakeArgs,
 }
 
-/// Bake parameters and the cache, shared by every command that may bake.
+/// Technique parameters and the cache, shared by every command that may bake.
 #[derive(clap::Args, Debug, Clone)]
 pub struct BakeArgs {
-    /// boxtree: image size per box face in texels (LCV04 uses 64 or 128).
-    #[arg(long, default_value_t = BoxTreeParams::default().tile)]
-    pub tile: u32,
-    /// boxtree: plane arrangement, `axis` (LCV04 fig. 3; 1.6× faster than diagonal at equal
-    /// fidelity targets, see BENCHMARKS.md), `diagonal` (fig. 6) or `billboard` (the naive
-    /// one-image baseline).
-    #[arg(long, default_value = "axis")]
-    pub planes: String,
-    /// boxtree: volume-ratio threshold for boxes to get images (LCV04 §3.2.4).
-    #[arg(long, default_value_t = BoxTreeParams::default().volume_threshold)]
-    pub volume_threshold: f32,
-    /// boxtree: keep all wood as geometry instead of baking it into the box images.
-    #[arg(long)]
-    pub wood_geometry: bool,
-    /// boxtree: a box opens when one of its texels would cover more than this many pixels.
-    #[arg(long, default_value_t = BoxTreeParams::default().texel_pixels)]
-    pub texel_pixels: f32,
-    /// boxtree: transition band width, relative to the LOD distance (0 = hard switches).
-    #[arg(long, default_value_t = BoxTreeParams::default().band)]
-    pub band: f32,
+    /// A technique parameter, TECHNIQUE.KEY=VALUE (repeatable), over the scene's
+    /// `[technique.NAME]` tables; `sylvan params` lists every key.
+    #[arg(long = "set", value_name = "TECHNIQUE.KEY=VALUE")]
+    pub set: Vec<String>,
     /// Folder for baked assets (default: $SYLVAN_CACHE_DIR, $XDG_CACHE_HOME/sylvan or ~/.cache/sylvan).
     #[arg(long)]
     pub cache_dir: Option<PathBuf>,
     /// Bake every time; read and write no cache files.
     #[arg(long)]
     pub no_cache: bool,
-    /// boxtree: most boxes per plant that get images.
-    #[arg(long, default_value_t = BoxTreeParams::default().max_boxes)]
-    pub max_boxes: u32,
-    /// boxtree: fewest leaves a box needs to get images.
-    #[arg(long, default_value_t = BoxTreeParams::default().min_leaves)]
-    pub min_leaves: u32,
-    /// hbt: view directions of the BTF (MNP01 §3.1): 6, 18, 66 or 258.
-    #[arg(long, default_value_t = sylvan_render::directions::SAMPLE_COUNTS[HbtParams::default().view_level as usize])]
-    pub hbt_views: usize,
-    /// hbt: light directions of the BTF: 6, 18, 66 or 258.
-    #[arg(long, default_value_t = sylvan_render::directions::SAMPLE_COUNTS[HbtParams::default().light_level as usize])]
-    pub hbt_lights: usize,
-    /// hbt: billboard size in texels (MNP01 uses 32 or 64).
-    #[arg(long, default_value_t = HbtParams::default().tile)]
-    pub hbt_tile: u32,
-    /// hbt: hierarchy levels, 1 (the tree), 2 (also main branches, drawn when the tree's texels would be magnified) or 3 (also the plant's meshes, drawn when the branches' would be).
-    #[arg(long, default_value_t = HbtParams::default().levels)]
-    pub hbt_levels: u32,
-    /// hbt: view directions of the branch level's BTFs: 6, 18, 66 or 258.
-    #[arg(long, default_value_t = sylvan_render::directions::SAMPLE_COUNTS[HbtParams::default().branch_view_level as usize])]
-    pub hbt_branch_views: usize,
-    /// hbt: light directions of the branch level's BTFs: 6, 18, 66 or 258.
-    #[arg(long, default_value_t = sylvan_render::directions::SAMPLE_COUNTS[HbtParams::default().branch_light_level as usize])]
-    pub hbt_branch_lights: usize,
-    /// hbt: most distinct main branches baked per plant (others drawn with a scaled representative).
-    #[arg(long, default_value_t = HbtParams::default().max_branch_objects)]
-    pub hbt_branch_objects: u32,
-    /// hbt: visibility cube-map face size in texels (MNP01 §3.3 uses 32).
-    #[arg(long, default_value_t = HbtParams::default().cube_resolution)]
-    pub hbt_cube: u32,
-    /// hbt: a tree opens into its branches when one of its texels would cover more than this many pixels.
-    #[arg(long, default_value_t = HbtParams::default().open_texel_pixels)]
-    pub hbt_open_pixels: f32,
-    /// hbt (levels 3): a tree is drawn as its meshes when one texel of its largest main branch would cover more than this many pixels.
-    #[arg(long, default_value_t = HbtParams::default().mesh_texel_pixels)]
-    pub hbt_mesh_pixels: f32,
-    /// hbt (levels 3): open an opened tree into its meshes `branch` by branch (each main branch where its own texels would be magnified) or as a whole `tree` (by its largest main branch).
-    #[arg(long, default_value = "tree")]
-    pub hbt_mesh_by: String,
-    /// hbt: cross-fade band around each level switch, relative to the switch (0 = hard switches).
-    #[arg(long, default_value_t = HbtParams::default().band)]
-    pub hbt_band: f32,
-    /// hbt: bake the tree level from `geometry` or by rendering its `branches` with the runtime algorithm (MNP01 §6.1); with --hbt-small-branches, main branches are rendered from their small branches too.
-    #[arg(long, default_value = "geometry")]
-    pub hbt_tree_from: String,
-    /// hbt (levels 2 and 3): also bake MNP01's small-branch level below each main branch (branch objects at most half its size) and open main branches into it where their texels would be magnified.
-    #[arg(long)]
-    pub hbt_small_branches: bool,
-    /// hbt: view × light pair weights below this are dropped and the rest renormalised (MNP01 §4.1); 0.45 keeps only the strongest pair.
-    #[arg(long, default_value_t = HbtParams::default().min_weight)]
-    pub hbt_min_weight: f32,
-    /// hbt: received sun shadows from `cascades` (measured closer to the reference) or `cubemaps` (MNP01 §3.3's 8-corner interpolation); the sky term always comes from the cube-maps.
-    #[arg(long, default_value = "cascades")]
-    pub hbt_shadows: String,
-    /// hbt baseline: reconstruct every tree under this fixed light direction X,Y,Z (towards the light) whatever the sun — a view-only impostor baked under one light.
-    #[arg(long)]
-    pub hbt_fixed_light: Option<String>,
-    /// hbt: projection of the blended images, `facing` or `cross` (MNP01 fig. 3.2).
-    #[arg(long, default_value = "facing")]
-    pub hbt_projection: String,
 }
 
 impl BakeArgs {
-    /// The validated boxtree parameters.
-    pub fn boxtree(&self) -> Result<BoxTreeParams> {
-        let layout = PlaneLayout::parse(&self.planes).ok_or_else(|| {
-            anyhow::anyhow!(
-                "--planes {}: expected `diagonal`, `axis` or `billboard` (the naive baseline)",
-                self.planes
-            )
-        })?;
-        let p = BoxTreeParams {
-            tile: self.tile,
-            layout,
-            volume_threshold: self.volume_threshold,
-            bake_wood: !self.wood_geometry,
-            texel_pixels: self.texel_pixels,
-            band: self.band,
-            max_boxes: self.max_boxes,
-            min_leaves: self.min_leaves,
-            ..Default::default()
-        };
-        p.validate()?;
-        Ok(p)
-    }
-
-    /// The validated hbt parameters.
-    pub fn hbt(&self) -> Result<HbtParams> {
-        let level = |flag: &str, n: usize| -> Result<u32> {
-            sylvan_render::directions::SAMPLE_COUNTS
-                .iter()
-                .position(|&c| c == n)
-                .map(|l| l as u32)
-                .ok_or_else(|| {
-                    anyhow::anyhow!("--{flag} {n}: expected 6, 18, 66 or 258 directions")
-                })
-        };
-        let projection = HbtProjection::parse(&self.hbt_projection).ok_or_else(|| {
-            anyhow::anyhow!(
-                "--hbt-projection {}: expected `facing` or `cross`",
-                self.hbt_projection
-            )
-        })?;
-        let shadows = HbtShadows::parse(&self.hbt_shadows).ok_or_else(|| {
-            anyhow::anyhow!(
-                "--hbt-shadows {}: expected `cubemaps` or `cascades`",
-                self.hbt_shadows
-            )
-        })?;
-        let fixed_light = match &self.hbt_fixed_light {
-            None => None,
-            Some(v) => {
-                let parts: Vec<f32> = v
-                    .split(',')
-                    .map(|x| x.trim().parse::<f32>())
-                    .collect::<Result<_, _>>()
-                    .map_err(|_| {
-                        anyhow::anyhow!("--hbt-fixed-light {v}: expected X,Y,Z numbers")
-                    })?;
-                let [x, y, z] = parts[..] else {
-                    anyhow::bail!("--hbt-fixed-light {v}: expected three numbers X,Y,Z");
-                };
-                Some([x, y, z])
-            }
-        };
-        let tree_from_branches = match self.hbt_tree_from.as_str() {
-            "geometry" => false,
-            "branches" => true,
-            other => anyhow::bail!("--hbt-tree-from {other}: expected `geometry` or `branches`"),
-        };
-        let mesh_per_branch = match self.hbt_mesh_by.as_str() {
-            "branch" => true,
-            "tree" => false,
-            other => anyhow::bail!("--hbt-mesh-by {other}: expected `branch` or `tree`"),
-        };
-        let p = HbtParams {
-            mesh_per_branch,
-            fixed_light,
-            tree_from_branches,
-            small_branches: self.hbt_small_branches,
-            min_weight: self.hbt_min_weight,
-            levels: self.hbt_levels,
-            view_level: level("hbt-views", self.hbt_views)?,
-            light_level: level("hbt-lights", self.hbt_lights)?,
-            branch_view_level: level("hbt-branch-views", self.hbt_branch_views)?,
-            branch_light_level: level("hbt-branch-lights", self.hbt_branch_lights)?,
-            max_branch_objects: self.hbt_branch_objects,
-            cube_resolution: self.hbt_cube,
-            open_texel_pixels: self.hbt_open_pixels,
-            mesh_texel_pixels: self.hbt_mesh_pixels,
-            band: self.hbt_band,
-            shadows,
-            tile: self.hbt_tile,
-            projection,
-            ..Default::default()
-        };
-        p.validate()?;
-        Ok(p)
+    /// The `--set` settings, each parsed and checked against its technique's schema.
+    pub fn settings(&self) -> Result<Vec<Setting>> {
+        let settings = self
+            .set
+            .iter()
+            .map(|a| Setting::from_arg(a).map_err(anyhow::Error::msg))
+            .collect::<Result<Vec<_>>>()?;
+        registry::check_settings(&settings)?;
+        Ok(settings)
     }
 
     /// The cache policy.
@@ -315,6 +152,16 @@ pub fn parse_sun(s: &str, base: Sun) -> Result<Sun> {
     })
 }
 
+/// Checks a scene's `[technique.NAME]` and `[[lod.band]]` parameters against the registry, so
+/// a bad key is reported with its place before anything is prepared.
+pub fn check_scene_settings(scene: &Scene) -> Result<()> {
+    registry::check_settings(&scene.technique_params)?;
+    for band in &scene.lod_bands {
+        registry::check_settings(&band.params)?;
+    }
+    Ok(())
+}
+
 /// Loads the scene (or the built-in one).
 pub fn load_scene(path: Option<&Path>) -> Result<Scene> {
     match path {
@@ -327,7 +174,7 @@ impl ViewArgs {
     /// Validates every flag and loads the scene.
     pub fn resolve(&self) -> Result<Resolved> {
         let (width, height) = parse_size(&self.size)?;
-        let technique = TechniqueKind::parse(&self.technique)?;
+        let technique = registry::find(&self.technique)?.name.to_string();
         let options = RenderOptions {
             width,
             height,
@@ -335,13 +182,13 @@ impl ViewArgs {
             technique,
             shadows: !self.no_shadows,
             shadow_resolution: self.shadow_res,
-            boxtree: self.bake.boxtree()?,
-            hbt: self.bake.hbt()?,
+            settings: self.bake.settings()?,
             cache: self.bake.cache(),
             ..Default::default()
         };
         options.factor()?;
         let scene = load_scene(self.scene.as_deref())?;
+        check_scene_settings(&scene)?;
         let camera = match &self.camera {
             Some(c) => parse_camera(c, scene.camera)?,
             None => scene.camera,

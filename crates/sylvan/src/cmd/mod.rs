@@ -4,6 +4,7 @@ pub mod bake;
 pub mod bench;
 pub mod common;
 pub mod compare;
+pub mod params;
 pub mod plant;
 pub mod render;
 pub mod stats;

@@ -85,7 +85,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     }
     let stats = stats.expect("at least one frame");
     let report = Report::new(
-        r.options.technique.name(),
+        &r.options.technique,
         [r.options.width, r.options.height],
         r.options.spp,
         std::slice::from_ref(&stats),

@@ -52,24 +52,10 @@ pub struct Report {
     pub baked_bytes: u64,
     pub gpu_bytes: u64,
     pub bake_ms: f64,
-    /// `hbt`: CPU bytes of the visibility cube-maps, and milliseconds to build the scene's.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub visibility_bytes: Option<u64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub visibility_ms: Option<f64>,
-    /// `hbt`: trees drawn opened into a lower level, branches or meshes (last frame).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub trees_opened: Option<u32>,
-    /// `hbt`: of those, trees drawn as their meshes (last frame).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub trees_meshed: Option<u32>,
-    /// `hbt` with small branches: main branches drawn as their small branches (last frame).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub branches_opened: Option<u32>,
-    /// `hbt` level 3: main branches (and rests) of opened trees drawn as their meshes, branch
-    /// by branch (last frame).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub branches_meshed: Option<u32>,
+    /// Each drawing technique's own statistics (last frame), under its name: e.g.
+    /// `"hbt": {"trees_opened": 12, "visibility_bytes": 3072, …}`.
+    #[serde(flatten)]
+    pub techniques: BTreeMap<String, BTreeMap<String, serde_json::Value>>,
     pub adapter: String,
     /// The camera path replayed (`bench --path`), as given.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -138,18 +124,27 @@ impl Report {
             baked_bytes: last.asset_bytes,
             gpu_bytes: last.gpu_bytes,
             bake_ms,
-            visibility_bytes: (last.visibility_bytes > 0).then_some(last.visibility_bytes),
-            visibility_ms: (last.visibility_bytes > 0).then_some(last.visibility_ms),
-            trees_opened: (last.visibility_bytes > 0 || last.trees_opened > 0)
-                .then_some(last.trees_opened),
-            trees_meshed: (last.visibility_bytes > 0 || last.trees_meshed > 0)
-                .then_some(last.trees_meshed),
-            branches_opened: (last.branches_opened > 0).then_some(last.branches_opened),
-            branches_meshed: (last.branches_meshed > 0).then_some(last.branches_meshed),
+            techniques: last
+                .technique_stats
+                .iter()
+                .map(|(name, stats)| {
+                    let values = stats.iter().map(|(k, &v)| (k.clone(), number(v))).collect();
+                    (name.clone(), values)
+                })
+                .collect(),
             adapter,
             path: None,
             per_frame: None,
         }
+    }
+}
+
+/// A statistic as JSON: whole numbers as integers.
+fn number(v: f64) -> serde_json::Value {
+    if v.fract() == 0.0 && v.abs() < 9.0e15 {
+        (v as i64).into()
+    } else {
+        v.into()
     }
 }
 

@@ -2,9 +2,9 @@
 //! §3.2.3), and laying the plant's triangles out so that what a box leaves as geometry when
 //! it is opened is one contiguous index range.
 
-use super::BoxTreeParams;
+use super::BoxTreeBakeParams;
 use crate::RenderError;
-use crate::bake::codec::{DecodeError, Decoder, Encoder, Fnv64};
+use crate::bake::codec::{DecodeError, Decoder, Encoder};
 use crate::bake::image::TileLevel;
 use crate::bake::views::PlaneLayout;
 use crate::bake::{BakeRequest, PlantBaker};
@@ -101,12 +101,7 @@ impl BoxTreeBaked {
         e.u32s(&self.wood_indices);
         e.u64(self.tiles.len() as u64);
         for levels in &self.tiles {
-            e.u64(levels.len() as u64);
-            for l in levels {
-                e.u32(l.size);
-                e.bytes(&l.color);
-                e.bytes(&l.normal);
-            }
+            TileLevel::encode_chain(&mut e, levels);
         }
         e.buf
     }
@@ -166,28 +161,7 @@ impl BoxTreeBaked {
         }
         let mut tiles = Vec::with_capacity(ntiles as usize);
         for _ in 0..ntiles {
-            let nlev = d.u64()?;
-            if nlev != tile.max(1).ilog2() as u64 + 1 {
-                return Err(bad(format!("{nlev} mip levels for a {tile}-texel tile")));
-            }
-            let mut levels = Vec::with_capacity(nlev as usize);
-            for m in 0..nlev {
-                let size = d.u32()?;
-                let color = d.bytes()?.to_vec();
-                let normal = d.bytes()?.to_vec();
-                let want = (tile >> m).max(1);
-                if size != want
-                    || color.len() != (size * size * 4) as usize
-                    || normal.len() != color.len()
-                {
-                    return Err(bad(format!("mip {m} has the wrong size")));
-                }
-                levels.push(TileLevel {
-                    size,
-                    color,
-                    normal,
-                });
-            }
+            let levels = TileLevel::decode_chain(&mut d, tile)?;
             tiles.push(levels);
         }
         d.finish()?;
@@ -227,43 +201,6 @@ impl BoxTreeBaked {
         }
         Ok(())
     }
-}
-
-/// The content hash of everything a bake depends on.
-pub fn input_hash(plant: &Plant, p: &BoxTreeParams) -> u64 {
-    let mut h = Fnv64::default();
-    h.field(b"boxtree")
-        .u32s(&[FORMAT_VERSION, crate::bake::cache::CONTAINER_VERSION])
-        .u32s(&[
-            p.tile,
-            p.supersample,
-            p.bake_wood as u32,
-            p.min_leaves,
-            p.max_boxes,
-        ])
-        .field(p.layout.name().as_bytes())
-        .f32s(&[p.volume_threshold]);
-    for mesh in [&plant.wood, &plant.leaves] {
-        h.f32s(bytemuck::cast_slice(&mesh.positions))
-            .f32s(bytemuck::cast_slice(&mesh.normals))
-            .f32s(bytemuck::cast_slice(&mesh.uvs))
-            .f32s(bytemuck::cast_slice(&mesh.colors))
-            .u32s(&mesh.indices);
-    }
-    let t = &plant.leaf_texture;
-    h.u32s(&[t.width, t.height]).field(&t.rgba);
-    for n in &plant.hierarchy.nodes {
-        h.u32s(&[
-            n.parent.unwrap_or(u32::MAX),
-            n.leaf_indices.start,
-            n.leaf_indices.end,
-            n.wood_indices.start,
-            n.wood_indices.end,
-        ])
-        .f32s(&n.bbox_min)
-        .f32s(&n.bbox_max);
-    }
-    h.finish()
 }
 
 /// A box chosen for images, before baking.
@@ -393,7 +330,7 @@ pub struct Layout {
 }
 
 /// Lays out the box tree of `plant` for `p`.
-pub fn layout(plant: &Plant, p: &BoxTreeParams) -> Layout {
+pub fn layout(plant: &Plant, p: &BoxTreeBakeParams) -> Layout {
     let selected = select_boxes(plant, p.volume_threshold, p.min_leaves, p.max_boxes);
     let nodes = &plant.hierarchy.nodes;
     let whole_leaves = 0..plant.leaves.indices.len() as u32;
@@ -509,15 +446,41 @@ pub fn layout(plant: &Plant, p: &BoxTreeParams) -> Layout {
     }
 }
 
+/// `boxtree`'s offline half (LCV04 §3.2): the box images of one plant.
+pub struct BoxTreeBake;
+
+impl crate::bake::Bake for BoxTreeBake {
+    const NAME: &'static str = "boxtree";
+    const FORMAT_VERSION: u32 = FORMAT_VERSION;
+    type Params = BoxTreeBakeParams;
+    type Asset = BoxTreeBaked;
+
+    fn bake(
+        gpu: &Gpu,
+        plant: &Plant,
+        params: &BoxTreeBakeParams,
+        progress: &mut dyn FnMut(usize, usize),
+    ) -> Result<BoxTreeBaked, RenderError> {
+        bake(gpu, plant, params, progress)
+    }
+
+    fn encode(asset: &BoxTreeBaked) -> Vec<u8> {
+        asset.encode()
+    }
+
+    fn decode(bytes: &[u8]) -> Result<BoxTreeBaked, crate::bake::codec::DecodeError> {
+        BoxTreeBaked::decode(bytes)
+    }
+}
+
 /// Bakes `plant`: layout, then every image on the GPU. `progress(done, total)` is called as
 /// images complete.
 pub fn bake(
     gpu: &Gpu,
     plant: &Plant,
-    p: &BoxTreeParams,
+    p: &BoxTreeBakeParams,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<BoxTreeBaked, RenderError> {
-    p.validate()?;
     let l = layout(plant, p);
     let baker = PlantBaker::new(gpu, plant, p.tile, p.supersample)?;
     let total = l.requests.len();
@@ -548,7 +511,7 @@ mod tests {
     #[test]
     fn layout_partitions_the_plant() {
         let plant = sylvan_plant::preset("pine").unwrap();
-        let p = BoxTreeParams::default();
+        let p = BoxTreeBakeParams::default();
         let l = layout(&plant, &p);
         assert!(l.boxes.len() > 1, "pine should get more than the root box");
         // Re-ordering is a permutation of triangles.

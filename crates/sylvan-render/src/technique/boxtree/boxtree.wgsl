@@ -242,7 +242,7 @@ fn fs_impostor(in: ImpostorOut) -> @location(0) vec4<f32> {
     let fogged = apply_fog_premultiplied(direct + ambient, alpha, world);
     // Debug view "technique": impostors in the boxtree colour, paler for finer boxes (opened
     // geometry stays geometry's colour).
-    let lit = debug_tint_lod(fogged / alpha, world, 1, b.info.w >> 1u) * alpha;
+    let lit = debug_tint_lod(fogged / alpha, world, TECHNIQUE_BOXTREE, b.info.w >> 1u) * alpha;
     return vec4<f32>(lit * (a / alpha), a);
 }
 

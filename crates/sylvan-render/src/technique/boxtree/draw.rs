@@ -1,17 +1,16 @@
 //! The GPU side of `boxtree`: atlas upload, per-frame traversal into instance lists, passes.
 
-use super::bake::{self as bt, BakedBox, BoxTreeBaked};
+use super::bake::{BakedBox, BoxTreeBaked};
 use super::traverse::{self, LodView, Placement};
-use super::{BoxTreeParams, MAX_BOXES};
+use super::{BoxTreeBakeParams, BoxTreeDrawParams, MAX_BOXES};
 use crate::RenderError;
-use crate::bake::codec::DecodeError;
 use crate::bake::views::PlaneLayout;
 use crate::frame::{CASCADES, FrameResources};
 use crate::instances::GpuTreeInstance;
 use crate::pipeline;
 use crate::technique::common::{self, Growable, TileAtlas};
 use crate::technique::geometry::{LEAF_TRANSLUCENCY, MeshPipelines, SpeciesMeshes};
-use crate::technique::{DrawContext, DrawCounts, FrameInput, Representation};
+use crate::technique::{DrawContext, DrawCounts, FrameInput, Technique};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use std::ops::Range;
@@ -81,7 +80,7 @@ struct Species {
 
 /// The prepared LCV04 technique.
 pub struct BoxTree {
-    params: BoxTreeParams,
+    draw: BoxTreeDrawParams,
     species: Vec<Species>,
     pipes: MeshPipelines,
     impostor: wgpu::RenderPipeline,
@@ -101,19 +100,6 @@ pub struct BoxTree {
     imp_ranges: [Range<u32>; PASSES],
     /// `res_ranges[pass][global box]`.
     res_ranges: Vec<Vec<Range<u32>>>,
-}
-
-impl BoxTree {
-    /// Buffer re-allocations so far (they happen only when a frame needs more than any before).
-    pub fn reallocations(&self) -> u32 {
-        self.impostors.reallocations + self.residual.reallocations
-    }
-
-    /// A picture of the baked images: per species a row of the root box's images (level 0,
-    /// composited over grey), for the viewer's "baked atlases" view.
-    pub fn atlas_preview(&self) -> &image::RgbaImage {
-        &self.preview
-    }
 }
 
 /// One row per plant of its root box's images, premultiplied colour over mid-grey.
@@ -161,41 +147,16 @@ fn reordered(mesh: &Mesh, indices: &[u32]) -> Mesh {
     }
 }
 
-impl Representation for BoxTree {
-    const NAME: &'static str = "boxtree";
-    const FORMAT_VERSION: u32 = bt::FORMAT_VERSION;
-    type Params = BoxTreeParams;
-    type Baked = BoxTreeBaked;
-
-    fn input_hash(plant: &Plant, params: &BoxTreeParams) -> u64 {
-        bt::input_hash(plant, params)
-    }
-
-    fn bake(
-        gpu: &Gpu,
-        plant: &Plant,
-        params: &BoxTreeParams,
-        progress: &mut dyn FnMut(usize, usize),
-    ) -> Result<BoxTreeBaked, RenderError> {
-        bt::bake(gpu, plant, params, progress)
-    }
-
-    fn encode(baked: &BoxTreeBaked) -> Vec<u8> {
-        baked.encode()
-    }
-
-    fn decode(bytes: &[u8]) -> Result<BoxTreeBaked, DecodeError> {
-        BoxTreeBaked::decode(bytes)
-    }
-
-    fn prepare(
+impl BoxTree {
+    /// Uploads every species' box images into one atlas and builds the pipelines.
+    pub fn new(
         gpu: &Gpu,
         frame: &FrameResources,
         plants: &[Plant],
         baked: &[BoxTreeBaked],
-        params: &BoxTreeParams,
+        params: &BoxTreeBakeParams,
+        draw: &BoxTreeDrawParams,
     ) -> Result<Self, RenderError> {
-        params.validate()?;
         if baked.len() != plants.len() {
             return Err(RenderError::Plant(format!(
                 "{} baked box trees for {} plants",
@@ -347,7 +308,7 @@ impl Representation for BoxTree {
         let static_bytes =
             atlas_bytes + box_buffer.size() + species.iter().map(|s| s.meshes.bytes()).sum::<u64>();
         Ok(Self {
-            params: params.clone(),
+            draw: draw.clone(),
             species,
             pipes,
             impostor,
@@ -368,12 +329,13 @@ impl Representation for BoxTree {
         })
     }
 
-    fn update(&mut self, gpu: &Gpu, input: &FrameInput<'_>) -> Result<(), RenderError> {
+    /// Per frame: each culled tree's box-tree traversal per pass, sorted and uploaded.
+    pub fn update(&mut self, gpu: &Gpu, input: &FrameInput<'_>) -> Result<(), RenderError> {
         let camera = LodView {
             eye: input.eye,
-            pixels_per_metre: input.pixels_per_metre / self.params.texel_pixels,
+            pixels_per_metre: input.pixels_per_metre / self.draw.texel_pixels,
             footprint: None,
-            band: self.params.band,
+            band: self.draw.band,
         };
         self.imp_staging.clear();
         self.res_staging.clear();
@@ -386,7 +348,7 @@ impl Representation for BoxTree {
                 p => LodView {
                     footprint: Some((
                         input.shadow_texel_m[p - 1] * SHADOW_FOOTPRINT_TEXELS
-                            / self.params.texel_pixels,
+                            / self.draw.texel_pixels,
                         if p == 1 {
                             0.0
                         } else {
@@ -453,17 +415,36 @@ impl Representation for BoxTree {
             .write(gpu, bytemuck::cast_slice(&self.res_staging))?;
         Ok(())
     }
+}
 
-    fn draw(&self, pass: &mut wgpu::RenderPass<'_>, ctx: &DrawContext<'_>) -> DrawCounts {
-        self.record(pass, ctx, false)
+impl Technique for BoxTree {
+    fn name(&self) -> &'static str {
+        super::ENTRY.name
     }
 
-    fn draw_shadow(&self, pass: &mut wgpu::RenderPass<'_>, ctx: &DrawContext<'_>) -> DrawCounts {
-        self.record(pass, ctx, true)
+    fn prepare_frame(
+        &mut self,
+        gpu: &Gpu,
+        _: &mut wgpu::CommandEncoder,
+        input: &FrameInput<'_>,
+    ) -> Result<(), RenderError> {
+        self.update(gpu, input)
+    }
+
+    fn draw(&self, pass: &mut wgpu::RenderPass<'_>, ctx: &DrawContext<'_>) -> DrawCounts {
+        self.record(pass, ctx, ctx.shadow_cascade().is_some())
     }
 
     fn bytes(&self) -> u64 {
         self.static_bytes + self.impostors.buffer.size() + self.residual.buffer.size()
+    }
+
+    fn atlas_preview(&self) -> Option<&image::RgbaImage> {
+        Some(&self.preview)
+    }
+
+    fn reallocations(&self) -> u32 {
+        self.impostors.reallocations + self.residual.reallocations
     }
 }
 

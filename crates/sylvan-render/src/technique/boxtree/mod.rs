@@ -47,17 +47,20 @@ mod draw;
 pub mod traverse;
 
 pub use crate::bake::views::PlaneLayout;
-pub use bake::BoxTreeBaked;
+pub use bake::{BoxTreeBake, BoxTreeBaked};
 pub use draw::BoxTree;
 
-use crate::RenderError;
+use super::Built;
+use super::params::{self, ParamDoc, ParamTable};
+use super::registry::{BakeSummary, Entry, Kind};
 
 /// Most boxes (and so images × 6) per plant.
 pub const MAX_BOXES: u32 = 256;
 
-/// Bake and draw parameters of `boxtree`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct BoxTreeParams {
+/// Bake parameters of `boxtree` (the cache key).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct BoxTreeBakeParams {
     /// Image size in texels (LCV04 §3.2.3: 64 or 128; any power of two 16–512 accepted).
     pub tile: u32,
     /// Volume-ratio threshold (LCV04 §3.2.4).
@@ -72,13 +75,9 @@ pub struct BoxTreeParams {
     pub bake_wood: bool,
     /// Supersampling per axis when baking (coverage precision).
     pub supersample: u32,
-    /// A box opens when one of its texels would cover more than this many pixels.
-    pub texel_pixels: f32,
-    /// Width of the transition band, relative to the LOD distance.
-    pub band: f32,
 }
 
-impl Default for BoxTreeParams {
+impl Default for BoxTreeBakeParams {
     fn default() -> Self {
         Self {
             tile: 64,
@@ -88,54 +87,180 @@ impl Default for BoxTreeParams {
             layout: PlaneLayout::Axis,
             bake_wood: true,
             supersample: 4,
+        }
+    }
+}
+
+impl ParamTable for BoxTreeBakeParams {
+    const DOCS: &'static [ParamDoc] = &[
+        ParamDoc {
+            key: "tile",
+            unit: "texels",
+            doc: "image size per box face (LCV04 §3.2.3 uses 64 or 128; a power of two 16–512)",
+        },
+        ParamDoc {
+            key: "volume_threshold",
+            unit: "",
+            doc: "a box gets images when its volume is at most this fraction of its nearest textured ancestor's (LCV04 §3.2.4)",
+        },
+        ParamDoc {
+            key: "min_leaves",
+            unit: "leaves",
+            doc: "fewest leaves a box needs to get images",
+        },
+        ParamDoc {
+            key: "max_boxes",
+            unit: "boxes",
+            doc: "most boxes per plant that get images",
+        },
+        ParamDoc {
+            key: "layout",
+            unit: "",
+            doc: "plane arrangement: \"axis\" (LCV04 fig. 3), \"diagonal\" (fig. 6) or \"billboard\" (the naive one-image baseline)",
+        },
+        ParamDoc {
+            key: "bake_wood",
+            unit: "",
+            doc: "bake the wood inside a box into its images (false: all wood stays geometry, as LCV04)",
+        },
+        ParamDoc {
+            key: "supersample",
+            unit: "per axis",
+            doc: "samples per texel per axis when baking",
+        },
+    ];
+
+    fn validate(&self) -> Result<(), String> {
+        if !self.tile.is_power_of_two() || !(16..=512).contains(&self.tile) {
+            return Err(format!(
+                "tile {}: must be a power of two from 16 to 512 (LCV04 uses 64 or 128)",
+                self.tile
+            ));
+        }
+        if !(self.volume_threshold.is_finite() && (0.0..=1.0).contains(&self.volume_threshold)) {
+            return Err(format!(
+                "volume_threshold {}: must be between 0 and 1",
+                self.volume_threshold
+            ));
+        }
+        if !(1..=MAX_BOXES).contains(&self.max_boxes) {
+            return Err(format!(
+                "max_boxes {}: must be 1 to {MAX_BOXES}",
+                self.max_boxes
+            ));
+        }
+        if !(1..=crate::bake::MAX_SUPERSAMPLE).contains(&self.supersample) {
+            return Err(format!(
+                "supersample {}: must be 1 to {}",
+                self.supersample,
+                crate::bake::MAX_SUPERSAMPLE
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Draw parameters of `boxtree` (never re-bake).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct BoxTreeDrawParams {
+    /// A box opens when one of its texels would cover more than this many pixels.
+    pub texel_pixels: f32,
+    /// Width of the transition band, relative to the LOD distance.
+    pub band: f32,
+}
+
+impl Default for BoxTreeDrawParams {
+    fn default() -> Self {
+        Self {
             texel_pixels: 0.8,
             band: 0.5,
         }
     }
 }
 
-impl BoxTreeParams {
-    /// Checks every value; the error names the option and the valid range.
-    pub fn validate(&self) -> Result<(), RenderError> {
-        let bad = |m: String| Err(RenderError::Option(m));
-        if !self.tile.is_power_of_two() || !(16..=512).contains(&self.tile) {
-            return bad(format!(
-                "boxtree tile {}: must be a power of two from 16 to 512 — LCV04 uses 64 or 128",
-                self.tile
-            ));
-        }
-        if !(self.volume_threshold.is_finite() && (0.0..=1.0).contains(&self.volume_threshold)) {
-            return bad(format!(
-                "boxtree volume threshold {}: must be between 0 and 1",
-                self.volume_threshold
-            ));
-        }
-        if !(1..=MAX_BOXES).contains(&self.max_boxes) {
-            return bad(format!(
-                "boxtree max boxes {}: must be 1 to {MAX_BOXES}",
-                self.max_boxes
-            ));
-        }
-        if !(1..=crate::bake::MAX_SUPERSAMPLE).contains(&self.supersample) {
-            return bad(format!(
-                "boxtree supersampling {}: must be 1 to {}",
-                self.supersample,
-                crate::bake::MAX_SUPERSAMPLE
-            ));
-        }
+impl ParamTable for BoxTreeDrawParams {
+    const DOCS: &'static [ParamDoc] = &[
+        ParamDoc {
+            key: "texel_pixels",
+            unit: "px",
+            doc: "a box opens when one of its texels would cover more than this many pixels (LCV04 §4.1)",
+        },
+        ParamDoc {
+            key: "band",
+            unit: "× LOD distance",
+            doc: "width of the cross-fade band between levels (0 = hard switches; LCV04 §4.2)",
+        },
+    ];
+
+    fn validate(&self) -> Result<(), String> {
         if !(self.texel_pixels.is_finite() && self.texel_pixels > 0.05 && self.texel_pixels <= 64.0)
         {
-            return bad(format!(
-                "boxtree texel size {} px: must be between 0.05 and 64",
+            return Err(format!(
+                "texel_pixels {}: must be above 0.05 and at most 64",
                 self.texel_pixels
             ));
         }
         if !(self.band.is_finite() && (0.0..=4.0).contains(&self.band)) {
-            return bad(format!(
-                "boxtree transition band {}: must be 0 to 4",
-                self.band
-            ));
+            return Err(format!("band {}: must be 0 to 4", self.band));
         }
         Ok(())
     }
 }
+
+/// The registry entry.
+pub const ENTRY: Entry = Entry {
+    name: "boxtree",
+    kind: Kind::PerTree,
+    summary: "LCV04: a bounding-box hierarchy with six images per box, opened by distance",
+    debug_color: [0.1, 0.5, 1.0],
+    schema: params::schema::<BoxTreeBakeParams, BoxTreeDrawParams>,
+    check: |s| params::resolve::<BoxTreeBakeParams, BoxTreeDrawParams>("boxtree", s).map(|_| ()),
+    build: |cx| {
+        let (bake, draw) = params::resolve::<BoxTreeBakeParams, BoxTreeDrawParams>(
+            "boxtree",
+            &cx.settings_for("boxtree"),
+        )?;
+        let (assets, reports) = cx.load_assets::<BoxTreeBake>(&bake)?;
+        Ok(Built {
+            technique: Box::new(BoxTree::new(
+                cx.gpu, cx.frame, cx.plants, &assets, &bake, &draw,
+            )?),
+            reports,
+        })
+    },
+    bake: Some(|job| {
+        let (bake, _) =
+            params::resolve::<BoxTreeBakeParams, BoxTreeDrawParams>("boxtree", job.settings)?;
+        let (b, report) = crate::bake::load_or_bake::<BoxTreeBake>(
+            job.gpu,
+            job.plant,
+            &bake,
+            job.policy,
+            job.progress,
+        )?;
+        let mut fields = serde_json::Map::new();
+        fields.insert("boxes".into(), b.boxes.len().into());
+        fields.insert("planes".into(), b.layout.name().into());
+        Ok(BakeSummary {
+            line: format!(
+                "{} boxes, {} images of {}² ({} planes)",
+                b.boxes.len(),
+                b.tiles.len(),
+                b.tile,
+                b.layout.name()
+            ),
+            report,
+            image_bytes: b.image_bytes(),
+            images: b.tiles.len(),
+            tile: b.tile,
+            fields,
+        })
+    }),
+    shaders: || {
+        vec![(
+            "boxtree",
+            crate::pipeline::with_frame(include_str!("boxtree.wgsl")),
+        )]
+    },
+};

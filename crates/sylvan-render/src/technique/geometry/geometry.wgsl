@@ -74,7 +74,7 @@ fn fs_wood(in: PlantOut) -> @location(0) vec4<f32> {
     let ndl = max(dot(n, l), 0.0);
     let vis = select(sun_visibility(in.world, n * 0.05), 0.0, ndl <= 0.0);
     let light = frame.sun_color.rgb * ndl * vis + sky_light(n) * in.ao;
-    return vec4<f32>(debug_tint(apply_fog(in.color * light, in.world), in.world, 0), 1.0);
+    return vec4<f32>(debug_tint(apply_fog(in.color * light, in.world), in.world, TECHNIQUE_GEOMETRY), 1.0);
 }
 
 fn leaf_sample(uv: vec2<f32>) -> vec4<f32> {
@@ -100,7 +100,7 @@ fn fs_leaf(in: PlantOut, @builtin(front_facing) front: bool) -> @location(0) vec
     let transmitted = albedo * vec3<f32>(1.1, 1.25, 0.55) * translucency * max(-ndl, 0.0);
     let direct = frame.sun_color.rgb * (albedo * max(ndl, 0.0) + transmitted) * vis;
     let ambient = albedo * sky_light(n) * in.ao;
-    return vec4<f32>(debug_tint(apply_fog(direct + ambient, in.world), in.world, 0), 1.0);
+    return vec4<f32>(debug_tint(apply_fog(direct + ambient, in.world), in.world, TECHNIQUE_GEOMETRY), 1.0);
 }
 
 // Shadow casters: wood writes depth only; leaves discard by alpha.

@@ -9,9 +9,10 @@
 //! Inputs: [`Plant`]s (one per species). Limits: a species' meshes must fit the device's
 //! max buffer size (checked in `prepare`).
 
-use super::{DrawContext, DrawCounts, Representation};
+use super::params::{self, NoParams};
+use super::registry::{Entry, Kind};
+use super::{Built, DrawContext, DrawCounts, FrameInput, Technique};
 use crate::RenderError;
-use crate::bake::codec::DecodeError;
 use crate::frame::FrameResources;
 use crate::instances::GpuTreeInstance;
 use crate::pipeline::{self, PassKind, PipelineSpec};
@@ -342,55 +343,46 @@ pub struct Geometry {
     pipes: MeshPipelines,
 }
 
-impl Representation for Geometry {
-    const NAME: &'static str = "geometry";
-    const FORMAT_VERSION: u32 = 1;
-    type Params = ();
-    /// Nothing to bake: the meshes are the plant's own.
-    type Baked = ();
+/// The registry entry.
+pub const ENTRY: Entry = Entry {
+    name: "geometry",
+    kind: Kind::PerTree,
+    summary: "the reference: every tree as its full meshes",
+    debug_color: [1.0, 0.45, 0.05],
+    schema: params::schema::<NoParams, NoParams>,
+    check: |s| params::resolve::<NoParams, NoParams>("geometry", s).map(|_| ()),
+    build: |cx| {
+        params::resolve::<NoParams, NoParams>("geometry", &cx.settings_for("geometry"))?;
+        Ok(Built {
+            technique: Box::new(Geometry::new(cx.gpu, cx.frame, cx.plants)?),
+            reports: Vec::new(),
+        })
+    },
+    bake: None,
+    shaders: || {
+        vec![(
+            "geometry",
+            pipeline::with_frame(include_str!("geometry.wgsl")),
+        )]
+    },
+};
 
-    fn input_hash(_: &Plant, _: &()) -> u64 {
-        0
+impl Technique for Geometry {
+    fn name(&self) -> &'static str {
+        ENTRY.name
     }
 
-    fn bake(
+    fn prepare_frame(
+        &mut self,
         _: &Gpu,
-        _: &Plant,
-        _: &(),
-        _: &mut dyn FnMut(usize, usize),
+        _: &mut wgpu::CommandEncoder,
+        _: &FrameInput<'_>,
     ) -> Result<(), RenderError> {
         Ok(())
     }
 
-    fn encode(_: &()) -> Vec<u8> {
-        Vec::new()
-    }
-
-    fn decode(_: &[u8]) -> Result<(), DecodeError> {
-        Ok(())
-    }
-
-    fn prepare(
-        gpu: &Gpu,
-        frame: &FrameResources,
-        plants: &[Plant],
-        _: &[()],
-        _: &(),
-    ) -> Result<Self, RenderError> {
-        let pipes = MeshPipelines::new(gpu, frame);
-        let species = plants
-            .iter()
-            .map(|p| SpeciesMeshes::new(gpu, &pipes, p, &p.wood, &p.leaves))
-            .collect::<Result<_, _>>()?;
-        Ok(Self { species, pipes })
-    }
-
     fn draw(&self, pass: &mut wgpu::RenderPass<'_>, ctx: &DrawContext<'_>) -> DrawCounts {
-        self.record(pass, ctx, false)
-    }
-
-    fn draw_shadow(&self, pass: &mut wgpu::RenderPass<'_>, ctx: &DrawContext<'_>) -> DrawCounts {
-        self.record(pass, ctx, true)
+        self.record(pass, ctx, ctx.shadow_cascade().is_some())
     }
 
     fn bytes(&self) -> u64 {
@@ -399,6 +391,16 @@ impl Representation for Geometry {
 }
 
 impl Geometry {
+    /// Uploads every species' meshes.
+    pub fn new(gpu: &Gpu, frame: &FrameResources, plants: &[Plant]) -> Result<Self, RenderError> {
+        let pipes = MeshPipelines::new(gpu, frame);
+        let species = plants
+            .iter()
+            .map(|p| SpeciesMeshes::new(gpu, &pipes, p, &p.wood, &p.leaves))
+            .collect::<Result<_, _>>()?;
+        Ok(Self { species, pipes })
+    }
+
     fn record(
         &self,
         pass: &mut wgpu::RenderPass<'_>,

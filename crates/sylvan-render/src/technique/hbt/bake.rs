@@ -2,10 +2,10 @@
 //! light sample) and two ambient billboards per view sample — and §4.1's reconstruction
 //! weights.
 
-use super::HbtParams;
+use super::HbtBakeParams;
 use super::visibility;
 use crate::RenderError;
-use crate::bake::codec::{DecodeError, Decoder, Encoder, Fnv64};
+use crate::bake::codec::{DecodeError, Decoder, Encoder};
 use crate::bake::image::TileImage;
 use crate::bake::views::PlaneFrame;
 use crate::bake::{BakeRequest, PlantBaker};
@@ -132,7 +132,7 @@ pub struct HbtBaked {
     /// (MNP01 §3.3 at the branch level).
     pub cubes: Vec<u8>,
     /// The small-branch level below the main branches (empty unless baked with
-    /// [`super::HbtParams::small_branches`]).
+    /// [`super::HbtBakeParams::small_branches`]).
     pub small: SmallLevel,
 }
 
@@ -478,53 +478,6 @@ fn decode_images(
     Ok((direct, ambient))
 }
 
-/// The content hash of everything a bake depends on (not the draw-only parameters).
-pub fn input_hash(plant: &Plant, p: &HbtParams) -> u64 {
-    let mut h = Fnv64::default();
-    h.field(b"hbt")
-        .u32s(&[FORMAT_VERSION, crate::bake::cache::CONTAINER_VERSION])
-        .u32s(&[
-            p.view_level,
-            p.light_level,
-            p.tile,
-            p.supersample,
-            p.shadow_resolution,
-            // Levels 2 and 3 (meshes below the branches) bake the same.
-            p.levels.min(2),
-            (p.levels >= 2 && p.tree_from_branches) as u32,
-            (p.levels >= 2 && p.small_branches) as u32,
-        ])
-        .f32s(&[LEAF_TRANSLUCENCY]);
-    if p.levels >= 2 {
-        h.u32s(&[
-            p.branch_view_level,
-            p.branch_light_level,
-            p.max_branch_objects,
-            p.cube_resolution,
-        ]);
-        // The level below depends on how the plant is instanced, not only on its triangles.
-        let inst = &plant.instancing;
-        h.u32s(&[inst.root, inst.objects.len() as u32]);
-        for o in &inst.objects {
-            h.u32s(&[o.level, o.uses, o.instances.len() as u32]);
-            for i in &o.instances {
-                h.u32s(&[i.object]).f32s(&i.transform.to_cols_array());
-            }
-        }
-    }
-    for mesh in [&plant.wood, &plant.leaves] {
-        h.f32s(bytemuck::cast_slice(&mesh.positions))
-            .f32s(bytemuck::cast_slice(&mesh.normals))
-            .f32s(bytemuck::cast_slice(&mesh.uvs))
-            .f32s(bytemuck::cast_slice(&mesh.colors))
-            .u32s(&mesh.indices);
-    }
-    let t = &plant.leaf_texture;
-    h.u32s(&[t.width, t.height]).field(&t.rgba);
-    h.f32s(&plant.bbox_min).f32s(&plant.bbox_max);
-    h.finish()
-}
-
 /// The orthographic frame of view sample `dir` (unit, from the tree towards the eye): the
 /// plant's box framed tightly along `dir`, widened so the outermost texel ring of a
 /// `tile`-texel image stays empty (no bleeding between atlas neighbours). Shared by the bake
@@ -738,7 +691,7 @@ fn light_view(
 fn bake_btf(
     gpu: &Gpu,
     plant: &Plant,
-    p: &HbtParams,
+    p: &HbtBakeParams,
     views: &DirectionSet,
     lights: &DirectionSet,
     progress: &mut dyn FnMut(usize),
@@ -1245,23 +1198,49 @@ fn branch_cubes(
     out
 }
 
-/// Bakes `plant`'s BTF (the top level) and, with `p.levels == 2`, the level below
+/// `hbt`'s offline half (MNP01 §3.1, §3.3, §6.1): one plant's BTF levels and cube-maps.
+pub struct HbtBake;
+
+impl crate::bake::Bake for HbtBake {
+    const NAME: &'static str = "hbt";
+    const FORMAT_VERSION: u32 = FORMAT_VERSION;
+    type Params = HbtBakeParams;
+    type Asset = HbtBaked;
+
+    fn bake(
+        gpu: &Gpu,
+        plant: &Plant,
+        params: &HbtBakeParams,
+        progress: &mut dyn FnMut(usize, usize),
+    ) -> Result<HbtBaked, RenderError> {
+        bake(gpu, plant, params, progress)
+    }
+
+    fn encode(asset: &HbtBaked) -> Vec<u8> {
+        asset.encode()
+    }
+
+    fn decode(bytes: &[u8]) -> Result<HbtBaked, DecodeError> {
+        HbtBaked::decode(bytes)
+    }
+}
+
+/// Bakes `plant`'s BTF (the top level) and, with `p.branches`, the level below
 /// ([`branch_level`]): each object's BTF over the branch direction sets, and each placement's
 /// visibility cube-maps. `progress(done, total)` counts rasterised views, light maps and lit
 /// views.
 pub fn bake(
     gpu: &Gpu,
     plant: &Plant,
-    p: &HbtParams,
+    p: &HbtBakeParams,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<HbtBaked, RenderError> {
-    p.validate()?;
     let option = |e: crate::directions::DirectionError| RenderError::Option(e.to_string());
     let views = DirectionSet::new(p.view_level).map_err(option)?;
     let lights = DirectionSet::new(p.light_level).map_err(option)?;
     let bviews = DirectionSet::new(p.branch_view_level).map_err(option)?;
     let blights = DirectionSet::new(p.branch_light_level).map_err(option)?;
-    let level = if p.levels >= 2 {
+    let level = if p.branches {
         branch_level(plant, p.max_branch_objects as usize)
     } else {
         BranchLevel {
@@ -1270,7 +1249,7 @@ pub fn bake(
             ranges: Vec::new(),
         }
     };
-    let small = if p.levels >= 2 && p.small_branches {
+    let small = if p.branches && p.small_branches {
         small_level(plant, &level, p.max_branch_objects as usize)
     } else {
         BranchLevel {
@@ -1284,7 +1263,7 @@ pub fn bake(
     let total = top + per_object * (level.objects.len() + small.objects.len());
     // MNP01 §6.1: with `tree_from_branches` the tree level is rendered from the level below
     // once that is baked (below); otherwise from geometry, now.
-    let compose = p.levels >= 2 && p.tree_from_branches && !level.placements.is_empty();
+    let compose = p.branches && p.tree_from_branches && !level.placements.is_empty();
     let (mut direct, mut ambient) = if compose {
         (Vec::new(), Vec::new())
     } else {
@@ -1349,7 +1328,7 @@ pub fn bake(
                 (Vec3::from(o.bbox_min), Vec3::from(o.bbox_max)),
                 p.tile,
                 p.supersample.min(2),
-                p.min_weight,
+                p.compose_min_weight,
             )
             .map_err(option)?;
             objects[k].direct = direct;
@@ -1372,7 +1351,7 @@ pub fn bake(
             (Vec3::from(plant.bbox_min), Vec3::from(plant.bbox_max)),
             p.tile,
             p.supersample.min(2),
-            p.min_weight,
+            p.compose_min_weight,
         )
         .map_err(option)?;
         progress(total, total);

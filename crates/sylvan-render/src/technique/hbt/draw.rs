@@ -4,16 +4,15 @@
 use super::bake::{self as hb, HbtBaked};
 use super::scene::{PlacedTree, SceneVisibility, trilinear};
 use super::visibility;
-use super::{HbtParams, HbtProjection, HbtShadows};
+use super::{HbtBakeParams, HbtDrawParams, HbtProjection, HbtShadows};
 use crate::RenderError;
-use crate::bake::codec::DecodeError;
 use crate::directions::{DirectionLut, DirectionSet};
 use crate::frame::{CASCADES, FrameResources};
 use crate::instances::{GpuTreeInstance, Instances};
 use crate::pipeline;
 use crate::technique::common::{self, Growable, TileAtlas};
 use crate::technique::geometry::{MeshPipelines, SpeciesMeshes};
-use crate::technique::{DrawContext, DrawCounts, FrameInput, Representation};
+use crate::technique::{DrawContext, DrawCounts, FrameInput, Technique};
 use bytemuck::{Pod, Zeroable};
 use glam::{Affine3A, Vec3};
 use std::ops::Range;
@@ -169,7 +168,7 @@ struct PlacementDraw {
     mesh_texel: Option<f32>,
 }
 
-/// With [`HbtParams::mesh_per_branch`], a placement whose meshes have fewer triangles than
+/// With [`HbtDrawParams::mesh_per_branch`], a placement whose meshes have fewer triangles than
 /// this opens into them with the rest (the first branch to open), not by its own texel: a
 /// bracket of a few leaf cards costs more as a billboard than as its triangles. Measured on the
 /// default view at 1280×720 (87 of the pine's 117 placements; every one of the prunus's and
@@ -209,7 +208,7 @@ struct PlantDraw {
     /// grouped by placement when `parts` is not empty.
     meshes: Option<SpeciesMeshes>,
     /// Per placement, its ranges of the wood and leaf indices (empty: the tree opens into its
-    /// meshes as a whole, [`HbtParams::mesh_per_branch`] off or no parts found).
+    /// meshes as a whole, [`HbtDrawParams::mesh_per_branch`] off or no parts found).
     parts: Vec<[Range<u32>; 2]>,
     placements: Vec<PlacementDraw>,
     /// Index of its bake in `prepare`'s list (species with equal bakes share one entry).
@@ -227,7 +226,10 @@ struct PlantDraw {
 
 /// The prepared MNP01 technique.
 pub struct Hbt {
-    params: HbtParams,
+    draw: HbtDrawParams,
+    /// The baked tile size and cube-map resolution (the scene's cube-maps use them).
+    tile: u32,
+    cube_resolution: u32,
     /// MNP01 §4.1's direction → 3 samples tables of the tree level (same results as
     /// `DirectionSet::nearest3`, ~3× faster on the CPU) and of the level below.
     views: DirectionLut,
@@ -323,14 +325,14 @@ impl Hbt {
             .iter()
             .map(|&p| {
                 let b = &self.plants[p];
-                hb::coverage(&self.views, &b.ambient, b.min, b.max, self.params.tile)
+                hb::coverage(&self.views, &b.ambient, b.min, b.max, self.tile)
             })
             .collect();
         self.scene = Some(SceneVisibility::build(
             &trees,
             &covers,
             terrain,
-            self.params.cube_resolution as usize,
+            self.cube_resolution as usize,
         ));
     }
 }
@@ -475,41 +477,16 @@ fn caster(
     inst
 }
 
-impl Representation for Hbt {
-    const NAME: &'static str = "hbt";
-    const FORMAT_VERSION: u32 = hb::FORMAT_VERSION;
-    type Params = HbtParams;
-    type Baked = HbtBaked;
-
-    fn input_hash(plant: &Plant, params: &HbtParams) -> u64 {
-        hb::input_hash(plant, params)
-    }
-
-    fn bake(
-        gpu: &Gpu,
-        plant: &Plant,
-        params: &HbtParams,
-        progress: &mut dyn FnMut(usize, usize),
-    ) -> Result<HbtBaked, RenderError> {
-        hb::bake(gpu, plant, params, progress)
-    }
-
-    fn encode(baked: &HbtBaked) -> Vec<u8> {
-        baked.encode()
-    }
-
-    fn decode(bytes: &[u8]) -> Result<HbtBaked, DecodeError> {
-        HbtBaked::decode(bytes)
-    }
-
-    fn prepare(
+impl Hbt {
+    /// Uploads every species' BTF levels into one atlas and builds the pipelines.
+    pub fn new(
         gpu: &Gpu,
         frame: &FrameResources,
         plants: &[Plant],
         baked: &[HbtBaked],
-        params: &HbtParams,
+        bake: &HbtBakeParams,
+        params: &HbtDrawParams,
     ) -> Result<Self, RenderError> {
-        params.validate()?;
         if baked.len() != plants.len() {
             return Err(RenderError::Plant(format!(
                 "{} baked BTFs for {} plants",
@@ -518,11 +495,11 @@ impl Representation for Hbt {
             )));
         }
         let option = |e: crate::directions::DirectionError| RenderError::Option(e.to_string());
-        let views = DirectionSet::new(params.view_level).map_err(option)?;
-        let lights = DirectionSet::new(params.light_level).map_err(option)?;
-        let bviews = DirectionSet::new(params.branch_view_level).map_err(option)?;
-        let blights = DirectionSet::new(params.branch_light_level).map_err(option)?;
-        let tile = params.tile;
+        let views = DirectionSet::new(bake.view_level).map_err(option)?;
+        let lights = DirectionSet::new(bake.light_level).map_err(option)?;
+        let bviews = DirectionSet::new(bake.branch_view_level).map_err(option)?;
+        let blights = DirectionSet::new(bake.branch_light_level).map_err(option)?;
+        let tile = bake.tile;
         let mut sets: Vec<GpuHbtSet> = Vec::new();
         let mut frames = Vec::new();
         let mut tiles: Vec<&[Vec<u8>]> = Vec::new();
@@ -531,14 +508,14 @@ impl Representation for Hbt {
         let mesh_pipes = (params.levels >= 3).then(|| MeshPipelines::new(gpu, frame));
         for (plant, b) in plants.iter().zip(baked) {
             let matches = b.tile == tile
-                && b.view_level == params.view_level
-                && b.light_level == params.light_level
+                && b.view_level == bake.view_level
+                && b.light_level == bake.light_level
                 // A plant without an instancing hierarchy has no level below: trees only.
-                && (params.levels < 2
+                && (!bake.branches
                     || b.objects.is_empty()
-                    || (b.branch_view_level == params.branch_view_level
-                        && b.branch_light_level == params.branch_light_level
-                        && b.cube_resolution == params.cube_resolution));
+                    || (b.branch_view_level == bake.branch_view_level
+                        && b.branch_light_level == bake.branch_light_level
+                        && b.cube_resolution == bake.cube_resolution));
             if !matches {
                 return Err(RenderError::Plant(format!(
                     "{}: baked BTF does not match the parameters (tile {} vs {tile}, levels {}/{} vs {}/{}, {} objects below) — re-bake",
@@ -546,8 +523,8 @@ impl Representation for Hbt {
                     b.tile,
                     b.view_level,
                     b.light_level,
-                    params.view_level,
-                    params.light_level,
+                    bake.view_level,
+                    bake.light_level,
                     b.objects.len()
                 )));
             }
@@ -761,7 +738,9 @@ impl Representation for Hbt {
                 .map(SpeciesMeshes::bytes)
                 .sum::<u64>();
         Ok(Self {
-            params: params.clone(),
+            draw: params.clone(),
+            tile: bake.tile,
+            cube_resolution: bake.cube_resolution,
             views: DirectionLut::new(&views, DirectionLut::DEFAULT_RESOLUTION).map_err(option)?,
             lights: DirectionLut::new(&lights, DirectionLut::DEFAULT_RESOLUTION).map_err(option)?,
             branch_views: DirectionLut::new(&bviews, DirectionLut::DEFAULT_RESOLUTION)
@@ -792,21 +771,23 @@ impl Representation for Hbt {
         })
     }
 
-    fn update(&mut self, gpu: &Gpu, input: &FrameInput<'_>) -> Result<(), RenderError> {
+    /// Per frame: each culled tree's levels, direction look-ups and visibility, sorted and
+    /// uploaded.
+    pub fn update(&mut self, gpu: &Gpu, input: &FrameInput<'_>) -> Result<(), RenderError> {
         self.staging.clear();
         self.mesh_staging.clear();
         self.opened = 0;
         self.meshed = 0;
         self.branches_opened = 0;
         self.branches_meshed = 0;
-        let with_meshes = self.params.levels >= 3;
+        let with_meshes = self.draw.levels >= 3;
         let sun = input.sun_dir;
         let light = self
-            .params
+            .draw
             .fixed_light
             .map_or(sun, |l| Vec3::from(l).normalize());
         // Whether the sun's visibility comes from the cube-maps (not the cascades).
-        let cube_sun = self.params.shadows == HbtShadows::CubeMaps;
+        let cube_sun = self.draw.shadows == HbtShadows::CubeMaps;
         if let Some(scene) = &mut self.scene
             && cube_sun
         {
@@ -824,7 +805,7 @@ impl Representation for Hbt {
                 d + r >= near && d - r <= far[c]
             }
         };
-        let p = &self.params;
+        let p = &self.draw;
         let open_px = p.open_texel_pixels;
         let (lo_px, hi_px) = (open_px * (1.0 - p.band), open_px * (1.0 + p.band));
         let ppm = input.pixels_per_metre;
@@ -1121,17 +1102,45 @@ impl Representation for Hbt {
         self.instances
             .write(gpu, bytemuck::cast_slice(&self.staging))
     }
+}
 
-    fn draw(&self, pass: &mut wgpu::RenderPass<'_>, ctx: &DrawContext<'_>) -> DrawCounts {
-        self.record(pass, ctx, false)
+impl Technique for Hbt {
+    fn name(&self) -> &'static str {
+        super::ENTRY.name
     }
 
-    fn draw_shadow(&self, pass: &mut wgpu::RenderPass<'_>, ctx: &DrawContext<'_>) -> DrawCounts {
-        self.record(pass, ctx, true)
+    fn prepare_frame(
+        &mut self,
+        gpu: &Gpu,
+        _: &mut wgpu::CommandEncoder,
+        input: &FrameInput<'_>,
+    ) -> Result<(), RenderError> {
+        self.update(gpu, input)
+    }
+
+    fn draw(&self, pass: &mut wgpu::RenderPass<'_>, ctx: &DrawContext<'_>) -> DrawCounts {
+        self.record(pass, ctx, ctx.shadow_cascade().is_some())
+    }
+
+    /// `visibility_bytes` (CPU bytes of the cube-maps), `visibility_ms` (building the scene's),
+    /// and this frame's `trees_opened`, `trees_meshed`, `branches_opened`, `branches_meshed`.
+    fn stats(&self) -> Vec<(&'static str, f64)> {
+        vec![
+            ("visibility_bytes", self.visibility_bytes() as f64),
+            ("visibility_ms", self.visibility_build_ms()),
+            ("trees_opened", self.opened as f64),
+            ("trees_meshed", self.meshed as f64),
+            ("branches_opened", self.branches_opened as f64),
+            ("branches_meshed", self.branches_meshed as f64),
+        ]
     }
 
     fn bytes(&self) -> u64 {
         self.static_bytes + self.instances.buffer.size() + self.mesh_instances.buffer.size()
+    }
+
+    fn reallocations(&self) -> u32 {
+        self.instances.reallocations
     }
 }
 
@@ -1179,7 +1188,7 @@ impl Hbt {
         if r.is_empty() {
             return counts;
         }
-        let quads = if !shadow && self.params.projection == HbtProjection::Cross {
+        let quads = if !shadow && self.draw.projection == HbtProjection::Cross {
             3
         } else {
             1

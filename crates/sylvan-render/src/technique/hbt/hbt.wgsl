@@ -291,7 +291,7 @@ fn fs_hbt(in: HbtOut) -> @location(0) vec4<f32> {
     let lit = tint3 * (alpha / max(direct.a, 1e-6)) * (frame.sun_color.rgb * vis * direct.rgb
         + sky_color * sky * sky_vis + frame.sky_ground.rgb * ground);
     let fogged = apply_fog_premultiplied(lit, alpha, in.world);
-    return vec4<f32>(debug_tint_lod(fogged / alpha, in.world, 2, in.lights.w) * alpha, alpha);
+    return vec4<f32>(debug_tint_lod(fogged / alpha, in.world, TECHNIQUE_HBT, in.lights.w) * alpha, alpha);
 }
 
 // Shadow casters: the quad facing the sun, each texel occluding with probability equal to the

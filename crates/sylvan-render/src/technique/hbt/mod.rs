@@ -15,12 +15,12 @@
 //!   with the reference's model (Lambert + leaf transmission) times its visibility from that
 //!   light (5×5 PCF in the light's depth map: soft self-shadows), then box-filtered down to the
 //!   tile and mip-mapped;
-//! - §3.2/§7 the **level below** ([`HbtParams::levels`] ≥ 2): representative main branches
+//! - §3.2/§7 the **level below** ([`HbtBakeParams::branches`]): representative main branches
 //!   and the plant's rest, each with its BTF, and their placements ([`bake::branch_level`]);
 //!   and (`levels` = 3, the default) §4's polygonal bottom: "the objects in the opened levels
 //!   of the hierarchy, either polygonal meshes or BTF" — the plant's meshes, drawn with the
 //!   `geometry` technique's pipelines;
-//! - §7's **small-branch level** ([`HbtParams::small_branches`], [`bake::small_level`]): each
+//! - §7's **small-branch level** ([`HbtBakeParams::small_branches`], [`bake::small_level`]): each
 //!   main branch's small branches with their BTFs, placements in the main branch's frame and
 //!   cube-maps of the rest of the main branch; an opened tree opens each main branch into them
 //!   by that branch's own texel size, and their visibility combines all three levels;
@@ -30,10 +30,10 @@
 //!   the other branches of the tree, or the other trees and the terrain — from the occluders'
 //!   own baked coverage;
 //! - §4 **LOD by projected size**: a tree opens into the level below when one of its texels
-//!   would cover more than [`HbtParams::open_texel_pixels`] pixels, and into its meshes when
+//!   would cover more than [`HbtDrawParams::open_texel_pixels`] pixels, and into its meshes when
 //!   one texel of its largest main branch would cover more than
-//!   [`HbtParams::mesh_texel_pixels`], each cross-faded over [`HbtParams::band`] (billboards
-//!   by optical depth, meshes by per-leaf presence); or, with [`HbtParams::mesh_per_branch`]
+//!   [`HbtDrawParams::mesh_texel_pixels`], each cross-faded over [`HbtDrawParams::band`] (billboards
+//!   by optical depth, meshes by per-leaf presence); or, with [`HbtDrawParams::mesh_per_branch`]
 //!   (MNP01's opened objects "either polygonal meshes or BTF"), each main branch of an opened
 //!   tree into its own meshes where its own lowest texel would be, the plant's meshes split by
 //!   placement ([`parts`]); §5 the meshes first (opaque), then every billboard (trees and
@@ -41,7 +41,7 @@
 //! - §4.1 and the appendix, **reconstruction**: per billboard and frame, the 3 view samples and
 //!   3 light samples enclosing the (object-space) eye and sun directions with their barycentric
 //!   weights (MNP01's precomputed table, [`crate::directions::DirectionLut::lookup`], on the
-//!   CPU); the 9 products, those below [`HbtParams::min_weight`] dropped and the rest
+//!   CPU); the 9 products, those below [`HbtDrawParams::min_weight`] dropped and the rest
 //!   renormalised ([`reconstruction_weights`]); 9 weighted fetches summed in one fragment (the
 //!   order-independent weighted sum the appendix builds with "darken then add", done in one
 //!   pass) and composited premultiplied over the background. Facing (billboard) or cross
@@ -56,7 +56,7 @@
 //! Deviations, plainly:
 //! - **Representative branches.** An L-system tree has as many distinct main branches as its
 //!   parameters vary (26 on the pine, 223 on the prunus); MNP01's pine was built from a few
-//!   instanced ones. At most [`HbtParams::max_branch_objects`] are baked, and the others are
+//!   instanced ones. At most [`HbtBakeParams::max_branch_objects`] are baked, and the others are
 //!   drawn with the representative of their size group, scaled (16 by default: with 6, a pine
 //!   70 px tall drawn from its branches was visibly wrong, ꟻLIP 0.059 against 0.049).
 //! - **Two BTF levels by default, then meshes** (MNP01 §7 has three BTF levels: small
@@ -77,7 +77,7 @@
 //!   With the pine the branch level is then drawn only within the cross-fades (the prunus,
 //!   whose branches are smaller against the tree, keeps a band of its own).
 //! - **A tree opens into its meshes as a whole by default.** Branch by branch
-//!   ([`HbtParams::mesh_per_branch`], `--hbt-mesh-by branch`) is built: each triangle of the
+//!   ([`HbtDrawParams::mesh_per_branch`], `--set hbt.mesh_per_branch=true`) is built: each triangle of the
 //!   plant's own meshes is given to the root instance whose expansion has a triangle with the
 //!   same centroid ([`parts`]), so each main branch draws its own polygons (not its
 //!   representative's); the rest (trunk) and parts under 64 triangles open with the tree's
@@ -91,7 +91,7 @@
 //!   right of its branch, a main branch pitched more or less — share one BTF).
 //! - **By default each level is baked from geometry.** MNP01 §6.1 renders a higher level from
 //!   the lower level's BTFs with the runtime algorithm so that levels shade alike:
-//!   [`HbtParams::tree_from_branches`] does that for the tree level (`compose.rs`, on the CPU)
+//!   [`HbtBakeParams::tree_from_branches`] does that for the tree level (`compose.rs`, on the CPU)
 //!   and, with small branches, for each main branch from its small branches.
 //!   Measured, it switches to the branches more smoothly (ꟻLIP between the levels at the switch
 //!   0.102 against 0.112) but is blurrier, the branches' reconstruction being resampled and
@@ -135,18 +135,21 @@
 pub mod bake;
 mod compose;
 mod draw;
+mod entry;
 pub mod parts;
 pub mod scene;
 pub mod visibility;
 
-pub use bake::{HbtBaked, reconstruction_weights};
+pub use bake::{HbtBake, HbtBaked, reconstruction_weights};
 pub use draw::Hbt;
+pub use entry::ENTRY;
 
-use crate::RenderError;
+use super::params::{self, ParamDoc, ParamTable};
 use crate::directions::MAX_LEVEL;
 
 /// How the blended images are projected on screen (MNP01 §4.1, fig. 3.2).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum HbtProjection {
     /// All images on one quad facing the eye ("billboard-like").
     Facing,
@@ -174,7 +177,8 @@ impl HbtProjection {
 }
 
 /// Where trees' received sun shadows come from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum HbtShadows {
     /// MNP01 §3.3/§4.2: the hierarchy of visibility cube-maps (other trees and terrain at the
     /// top level, other branches below), which also scale the sky term.
@@ -203,53 +207,16 @@ impl HbtShadows {
     }
 }
 
-/// Bake and draw parameters of `hbt`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct HbtParams {
-    /// Levels of the hierarchy: 1, the tree; 2, also the level below (representative main
-    /// branches and the plant's rest), opened when the tree's texels would be magnified; 3, also
-    /// the plant's own meshes (MNP01 §4's polygonal bottom), opened when the largest main
-    /// branch's texels would be (without a level below: the tree's). 2 and 3 share a bake.
-    pub levels: u32,
-    /// View-direction set of the level below: subdivision level 0..=3.
-    pub branch_view_level: u32,
-    /// Light-direction set of the level below.
-    pub branch_light_level: u32,
-    /// Most distinct main branches baked per plant (the rest are drawn with a scaled
-    /// representative; see [`bake::branch_level`]).
-    pub max_branch_objects: u32,
-    /// Side of each visibility cube-map face (MNP01 uses 32).
-    pub cube_resolution: u32,
-    /// Draw only: a tree opens into its branches when one of its texels would cover more than
-    /// this many pixels (MNP01 §4: when the billboard would be magnified).
-    pub open_texel_pixels: f32,
-    /// Draw only (`levels` = 3): a tree is drawn as its meshes when one texel of its largest
-    /// main branch would cover more than this many pixels (a plant without a level below: when
-    /// its tree texel would cover more than [`HbtParams::open_texel_pixels`]).
-    pub mesh_texel_pixels: f32,
-    /// Draw only (`levels` = 3): an opened tree draws each placement of the level below (main
-    /// branch or rest) as its meshes where that placement's own lowest BTF texel would cover
-    /// more than [`HbtParams::mesh_texel_pixels`] (MNP01 §4: opened objects are "either
-    /// polygonal meshes or BTF"); off, the tree opens into its meshes as a whole, by its
-    /// largest main branch's texel.
-    pub mesh_per_branch: bool,
-    /// Draw only: the cross-fade band around those switches, relative (0 = hard switch).
-    pub band: f32,
-    /// With `levels` ≥ 2: bake the tree level by rendering the level below with the runtime
-    /// algorithm (MNP01 §6.1), so the two levels shade alike; otherwise from geometry. With
-    /// [`HbtParams::small_branches`], each main branch that has small branches is likewise
-    /// rendered from them first.
-    pub tree_from_branches: bool,
-    /// With `levels` ≥ 2: also bake MNP01 §7's third BTF level, each main branch's small
-    /// branches ([`bake::small_level`]); an opened tree then opens each main branch into them
-    /// where that branch's texels would be magnified. Off by default: measured, it gains
-    /// little on a plant built for it and nothing on the presets (module docs, BENCHMARKS.md).
-    pub small_branches: bool,
-    /// Draw only: received sun shadows from cube-maps or cascades.
-    pub shadows: HbtShadows,
-    /// View-direction set: subdivision level 0..=3 (6, 18, 66 or 258 samples).
+/// Bake parameters of `hbt` (the cache key).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct HbtBakeParams {
+    /// View-direction set of the tree level: subdivision level 0..=3 (written as its count:
+    /// 6, 18, 66 or 258).
+    #[serde(rename = "views", with = "params::direction_count")]
     pub view_level: u32,
-    /// Light-direction set: subdivision level 0..=3.
+    /// Light-direction set of the tree level.
+    #[serde(rename = "lights", with = "params::direction_count")]
     pub light_level: u32,
     /// Billboard size in texels (MNP01: 32 or 64; a power of two 8–256).
     pub tile: u32,
@@ -257,26 +224,222 @@ pub struct HbtParams {
     pub supersample: u32,
     /// Side of each light's self-shadow depth map (texels).
     pub shadow_resolution: u32,
+    /// Bake the level below the tree: representative main branches and the plant's rest, with
+    /// their visibility cube-maps (needed by draw `levels` 2; `levels` 3 opens into meshes
+    /// from the branches, or from the tree without them).
+    pub branches: bool,
+    /// View-direction set of the level below.
+    #[serde(rename = "branch_views", with = "params::direction_count")]
+    pub branch_view_level: u32,
+    /// Light-direction set of the level below.
+    #[serde(rename = "branch_lights", with = "params::direction_count")]
+    pub branch_light_level: u32,
+    /// Most distinct main branches baked per plant (the rest are drawn with a scaled
+    /// representative; see [`bake::branch_level`]).
+    pub max_branch_objects: u32,
+    /// Side of each visibility cube-map face (MNP01 uses 32).
+    pub cube_resolution: u32,
+    /// With branches: bake the tree level by rendering the level below with the runtime
+    /// algorithm (MNP01 §6.1), so the two levels shade alike; otherwise from geometry. With
+    /// [`HbtBakeParams::small_branches`], each main branch that has small branches is likewise
+    /// rendered from them first.
+    pub tree_from_branches: bool,
+    /// With branches: also bake MNP01 §7's third BTF level, each main branch's small branches
+    /// ([`bake::small_level`]); an opened tree then opens each main branch into them where
+    /// that branch's texels would be magnified. Off by default: measured, it gains little on a
+    /// plant built for it and nothing on the presets (module docs, BENCHMARKS.md).
+    pub small_branches: bool,
+    /// With `tree_from_branches`: the pair-weight threshold of the composition (MNP01 §4.1).
+    pub compose_min_weight: f32,
+}
+
+impl Default for HbtBakeParams {
+    fn default() -> Self {
+        Self {
+            // 66 views: with 18 (45° apart) the blend of 3 differing silhouettes blurs trees
+            // and their shadows (FLIP on the default view 0.107 with 18, 0.082 with 66).
+            view_level: 2,
+            light_level: 1,
+            tile: 32,
+            supersample: 4,
+            shadow_resolution: 256,
+            branches: true,
+            branch_view_level: 1,
+            branch_light_level: 1,
+            max_branch_objects: 16,
+            cube_resolution: 8,
+            tree_from_branches: false,
+            small_branches: false,
+            compose_min_weight: 0.05,
+        }
+    }
+}
+
+impl ParamTable for HbtBakeParams {
+    const DOCS: &'static [ParamDoc] = &[
+        ParamDoc {
+            key: "views",
+            unit: "directions",
+            doc: "view samples of the tree's BTF (MNP01 §3.1): 6, 18, 66 or 258",
+        },
+        ParamDoc {
+            key: "lights",
+            unit: "directions",
+            doc: "light samples of the tree's BTF: 6, 18, 66 or 258",
+        },
+        ParamDoc {
+            key: "tile",
+            unit: "texels",
+            doc: "billboard size (MNP01 uses 32 or 64; a power of two 8–256)",
+        },
+        ParamDoc {
+            key: "supersample",
+            unit: "per axis",
+            doc: "G-buffer samples per texel per axis when baking",
+        },
+        ParamDoc {
+            key: "shadow_resolution",
+            unit: "texels",
+            doc: "side of each light's self-shadow depth map",
+        },
+        ParamDoc {
+            key: "branches",
+            unit: "",
+            doc: "bake the level below the tree: main branches with their visibility cube-maps (MNP01 §3.2)",
+        },
+        ParamDoc {
+            key: "branch_views",
+            unit: "directions",
+            doc: "view samples of the branch BTFs: 6, 18, 66 or 258",
+        },
+        ParamDoc {
+            key: "branch_lights",
+            unit: "directions",
+            doc: "light samples of the branch BTFs: 6, 18, 66 or 258",
+        },
+        ParamDoc {
+            key: "max_branch_objects",
+            unit: "objects",
+            doc: "most distinct main branches baked per plant (others drawn with a scaled representative)",
+        },
+        ParamDoc {
+            key: "cube_resolution",
+            unit: "texels",
+            doc: "visibility cube-map face size (MNP01 §3.3 uses 32)",
+        },
+        ParamDoc {
+            key: "tree_from_branches",
+            unit: "",
+            doc: "bake the tree level by rendering its branches with the runtime algorithm (MNP01 §6.1) instead of from geometry",
+        },
+        ParamDoc {
+            key: "small_branches",
+            unit: "",
+            doc: "also bake MNP01 §7's small-branch level below each main branch",
+        },
+        ParamDoc {
+            key: "compose_min_weight",
+            unit: "",
+            doc: "with tree_from_branches: view × light pair weights below this are dropped when composing",
+        },
+    ];
+
+    fn validate(&self) -> Result<(), String> {
+        if !(1..=64).contains(&self.max_branch_objects) {
+            return Err(format!(
+                "max_branch_objects {}: must be 1 to 64",
+                self.max_branch_objects
+            ));
+        }
+        if !(2..=bake::MAX_CUBE_RESOLUTION).contains(&self.cube_resolution) {
+            return Err(format!(
+                "cube_resolution {}: must be 2 to {} (MNP01 uses 32)",
+                self.cube_resolution,
+                bake::MAX_CUBE_RESOLUTION
+            ));
+        }
+        for (key, level) in [
+            ("views", self.view_level),
+            ("lights", self.light_level),
+            ("branch_views", self.branch_view_level),
+            ("branch_lights", self.branch_light_level),
+        ] {
+            if level > MAX_LEVEL {
+                return Err(format!("{key}: must be 6, 18, 66 or 258 directions"));
+            }
+        }
+        if !self.tile.is_power_of_two() || !(8..=256).contains(&self.tile) {
+            return Err(format!(
+                "tile {}: must be a power of two from 8 to 256 (MNP01 uses 32 or 64)",
+                self.tile
+            ));
+        }
+        if !(1..=crate::bake::MAX_SUPERSAMPLE).contains(&self.supersample) {
+            return Err(format!(
+                "supersample {}: must be 1 to {}",
+                self.supersample,
+                crate::bake::MAX_SUPERSAMPLE
+            ));
+        }
+        if !(16..=crate::bake::MAX_TILE).contains(&self.shadow_resolution) {
+            return Err(format!(
+                "shadow_resolution {}: must be 16 to {}",
+                self.shadow_resolution,
+                crate::bake::MAX_TILE
+            ));
+        }
+        if !(self.compose_min_weight.is_finite() && (0.0..0.5).contains(&self.compose_min_weight)) {
+            return Err(format!(
+                "compose_min_weight {}: must be at least 0 and below 0.5",
+                self.compose_min_weight
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Draw parameters of `hbt` (never re-bake).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct HbtDrawParams {
+    /// Levels of the hierarchy drawn: 1, the tree; 2, also the level below (when baked),
+    /// opened when the tree's texels would be magnified; 3, also the plant's own meshes (MNP01
+    /// §4's polygonal bottom), opened when the largest main branch's texels would be (without a
+    /// level below: the tree's).
+    pub levels: u32,
+    /// A tree opens into its branches when one of its texels would cover more than this many
+    /// pixels (MNP01 §4: when the billboard would be magnified).
+    pub open_texel_pixels: f32,
+    /// (`levels` = 3) a tree is drawn as its meshes when one texel of its largest main branch
+    /// would cover more than this many pixels (a plant without a level below: when its tree
+    /// texel would cover more than [`HbtDrawParams::open_texel_pixels`]).
+    pub mesh_texel_pixels: f32,
+    /// (`levels` = 3) an opened tree draws each placement of the level below (main branch or
+    /// rest) as its meshes where that placement's own lowest BTF texel would cover more than
+    /// [`HbtDrawParams::mesh_texel_pixels`] (MNP01 §4: opened objects are "either polygonal
+    /// meshes or BTF"); off, the tree opens into its meshes as a whole, by its largest main
+    /// branch's texel.
+    pub mesh_per_branch: bool,
+    /// The cross-fade band around those switches, relative (0 = hard switch).
+    pub band: f32,
+    /// Received sun shadows from cube-maps or cascades.
+    pub shadows: HbtShadows,
     /// Pair weights below this are dropped and the rest renormalised (MNP01 §4.1).
     pub min_weight: f32,
-    /// Facing or cross projection (draw only).
+    /// Facing or cross projection.
     pub projection: HbtProjection,
-    /// Draw only, a baseline: reconstruct every tree under this fixed world direction (unit,
-    /// towards the light) whatever the sun — a view-only impostor baked under one light, as
-    /// octahedral impostors are. `None` (the default) follows the sun.
+    /// A baseline: reconstruct every tree under this fixed world direction (unit, towards the
+    /// light) whatever the sun — a view-only impostor baked under one light, as octahedral
+    /// impostors are. `None` (the default) follows the sun.
     pub fixed_light: Option<[f32; 3]>,
 }
 
-impl Default for HbtParams {
+impl Default for HbtDrawParams {
     fn default() -> Self {
         Self {
             // Measured on the default view at 1280×720 (BENCHMARKS.md): with the meshes below
             // the branches ꟻLIP 0.050 at 5.5× geometry's speed; without, 0.098 at 4.6×.
             levels: 3,
-            branch_view_level: 1,
-            branch_light_level: 1,
-            max_branch_objects: 16,
-            cube_resolution: 8,
             open_texel_pixels: 2.0,
             // Measured on the default view at 1280×720, same speed: 0.35 ꟻLIP 0.044, 0.5 0.049,
             // 1.0 0.075 and slower (more branch billboards); one pine 60 px tall, back-lit, is
@@ -287,18 +450,9 @@ impl Default for HbtParams {
             // same ꟻLIP (more branch BTF fill and draws; BENCHMARKS.md).
             mesh_per_branch: false,
             band: 0.3,
-            tree_from_branches: false,
-            small_branches: false,
             // Measured: MNP01's 8-corner interpolation under-darkens a tree in another's shadow
             // (0.080 vs the reference's 0.289 on the test grove; cascades 0.301), see BENCHMARKS.md.
             shadows: HbtShadows::Cascades,
-            // 66 views: with 18 (45° apart) the blend of 3 differing silhouettes blurs trees
-            // and their shadows (FLIP on the default view 0.107 with 18, 0.082 with 66).
-            view_level: 2,
-            light_level: 1,
-            tile: 32,
-            supersample: 4,
-            shadow_resolution: 256,
             min_weight: 0.05,
             projection: HbtProjection::Facing,
             fixed_light: None,
@@ -306,88 +460,87 @@ impl Default for HbtParams {
     }
 }
 
-impl HbtParams {
-    /// Checks every value; the error names the option and the valid range.
-    pub fn validate(&self) -> Result<(), RenderError> {
-        let bad = |m: String| Err(RenderError::Option(m));
+impl ParamTable for HbtDrawParams {
+    const DOCS: &'static [ParamDoc] = &[
+        ParamDoc {
+            key: "levels",
+            unit: "",
+            doc: "levels drawn: 1 the tree, 2 also its main branches, 3 also the plant's meshes (MNP01 §4)",
+        },
+        ParamDoc {
+            key: "open_texel_pixels",
+            unit: "px",
+            doc: "a tree opens into its branches when one of its texels would cover more than this",
+        },
+        ParamDoc {
+            key: "mesh_texel_pixels",
+            unit: "px",
+            doc: "(levels 3) a tree is drawn as meshes when a texel of its largest main branch would cover more than this",
+        },
+        ParamDoc {
+            key: "mesh_per_branch",
+            unit: "",
+            doc: "(levels 3) open an opened tree into its meshes branch by branch instead of as a whole",
+        },
+        ParamDoc {
+            key: "band",
+            unit: "× switch",
+            doc: "cross-fade band around each level switch (0 = hard switches)",
+        },
+        ParamDoc {
+            key: "shadows",
+            unit: "",
+            doc: "received sun shadows from \"cascades\" (measured closer) or \"cubemaps\" (MNP01 §3.3)",
+        },
+        ParamDoc {
+            key: "min_weight",
+            unit: "",
+            doc: "view × light pair weights below this are dropped and the rest renormalised (MNP01 §4.1)",
+        },
+        ParamDoc {
+            key: "projection",
+            unit: "",
+            doc: "blended images on one \"facing\" quad or on \"cross\" planes (MNP01 fig. 3.2)",
+        },
+        ParamDoc {
+            key: "fixed_light",
+            unit: "direction",
+            doc: "baseline: reconstruct under this fixed light [x, y, z] whatever the sun (unset: follow the sun)",
+        },
+    ];
+
+    fn validate(&self) -> Result<(), String> {
         if !(1..=3).contains(&self.levels) {
-            return bad(format!(
-                "hbt levels {}: must be 1 (the tree), 2 (tree and main branches) or 3 (also the plant's meshes)",
+            return Err(format!(
+                "levels {}: must be 1 (the tree), 2 (tree and main branches) or 3 (also the plant's meshes)",
                 self.levels
             ));
         }
-        if !(1..=64).contains(&self.max_branch_objects) {
-            return bad(format!(
-                "hbt branch objects {}: must be 1 to 64",
-                self.max_branch_objects
-            ));
-        }
-        if !(2..=bake::MAX_CUBE_RESOLUTION).contains(&self.cube_resolution) {
-            return bad(format!(
-                "hbt cube-map resolution {}: must be 2 to {} (MNP01 uses 32)",
-                self.cube_resolution,
-                bake::MAX_CUBE_RESOLUTION
-            ));
-        }
         if !(self.open_texel_pixels.is_finite() && (0.1..=16.0).contains(&self.open_texel_pixels)) {
-            return bad(format!(
-                "hbt open texel pixels {}: must be 0.1 to 16",
+            return Err(format!(
+                "open_texel_pixels {}: must be 0.1 to 16",
                 self.open_texel_pixels
             ));
         }
         if !(self.mesh_texel_pixels.is_finite() && (0.1..=16.0).contains(&self.mesh_texel_pixels)) {
-            return bad(format!(
-                "hbt mesh texel pixels {}: must be 0.1 to 16",
+            return Err(format!(
+                "mesh_texel_pixels {}: must be 0.1 to 16",
                 self.mesh_texel_pixels
             ));
         }
         if !(self.band.is_finite() && (0.0..=0.9).contains(&self.band)) {
-            return bad(format!("hbt band {}: must be 0 to 0.9", self.band));
-        }
-        for (what, level) in [
-            ("view", self.view_level),
-            ("light", self.light_level),
-            ("branch view", self.branch_view_level),
-            ("branch light", self.branch_light_level),
-        ] {
-            if level > MAX_LEVEL {
-                return bad(format!(
-                    "hbt {what} level {level}: must be 0 to {MAX_LEVEL} (6, 18, 66 or 258 directions)"
-                ));
-            }
-        }
-        if !self.tile.is_power_of_two() || !(8..=256).contains(&self.tile) {
-            return bad(format!(
-                "hbt tile {}: must be a power of two from 8 to 256 — MNP01 uses 32 or 64",
-                self.tile
-            ));
-        }
-        if !(1..=crate::bake::MAX_SUPERSAMPLE).contains(&self.supersample) {
-            return bad(format!(
-                "hbt supersampling {}: must be 1 to {}",
-                self.supersample,
-                crate::bake::MAX_SUPERSAMPLE
-            ));
-        }
-        if !(16..=crate::bake::MAX_TILE).contains(&self.shadow_resolution) {
-            return bad(format!(
-                "hbt shadow resolution {}: must be 16 to {}",
-                self.shadow_resolution,
-                crate::bake::MAX_TILE
-            ));
+            return Err(format!("band {}: must be 0 to 0.9", self.band));
         }
         if !(self.min_weight.is_finite() && (0.0..0.5).contains(&self.min_weight)) {
-            return bad(format!(
-                "hbt minimum weight {}: must be at least 0 and below 0.5",
+            return Err(format!(
+                "min_weight {}: must be at least 0 and below 0.5",
                 self.min_weight
             ));
         }
         if let Some(l) = self.fixed_light
             && !(l.iter().all(|c| c.is_finite()) && glam::Vec3::from(l).length() > 1e-6)
         {
-            return bad(format!(
-                "hbt fixed light {l:?}: must be a non-zero direction"
-            ));
+            return Err(format!("fixed_light {l:?}: must be a non-zero direction"));
         }
         Ok(())
     }

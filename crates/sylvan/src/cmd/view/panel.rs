@@ -7,7 +7,7 @@ use super::camera::Mode;
 use super::stats::{FrameClock, bytes};
 use super::viewer::Viewer;
 use egui::{Align2, Color32, RichText};
-use sylvan_render::{DebugView, TechniqueKind};
+use sylvan_render::{DebugView, registry};
 
 /// Requests the panel makes of the application.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -219,13 +219,13 @@ fn panel(ui: &mut egui::Ui, v: &mut Viewer, s: &mut UiState) {
 fn technique(ui: &mut egui::Ui, v: &mut Viewer) {
     let b = &mut v.settings.build;
     egui::ComboBox::from_id_salt("technique")
-        .selected_text(b.technique.name())
+        .selected_text(b.technique.clone())
         .show_ui(ui, |ui| {
-            for (name, kind) in TechniqueKind::ALL {
-                ui.selectable_value(&mut b.technique, kind, name);
+            for e in registry::REGISTRY {
+                ui.selectable_value(&mut b.technique, e.name.to_string(), e.name);
             }
         });
-    if b.technique == TechniqueKind::Auto || !b.lod_chain.is_empty() {
+    if b.technique == "auto" || !b.lod_chain.is_empty() {
         ui.label("auto: distance bands (m)");
         let mut remove = None;
         for (i, entry) in b.lod_chain.iter_mut().enumerate() {
@@ -236,7 +236,7 @@ fn technique(ui: &mut egui::Ui, v: &mut Viewer) {
                         .width(90.0)
                         .selected_text(band.technique.clone())
                         .show_ui(ui, |ui| {
-                            for (name, _) in TechniqueKind::ALL {
+                            for name in sylvan_render::technique::lod::chainable() {
                                 changed |= ui
                                     .selectable_value(&mut band.technique, name.to_string(), name)
                                     .changed();

@@ -9,7 +9,7 @@ use super::reload::SceneWatcher;
 use std::sync::Arc;
 use sylvan_gpu::Gpu;
 use sylvan_plant::Plant;
-use sylvan_render::{DebugView, RenderOptions, Renderer, TechniqueKind};
+use sylvan_render::{DebugView, RenderOptions, Renderer};
 use sylvan_scene::{Fog, Scene, Sky, Sun};
 
 /// What the panel edits.
@@ -39,7 +39,7 @@ pub struct Settings {
 #[derive(Debug, Clone, PartialEq)]
 pub struct BuildSettings {
     /// Technique for every tree (`auto`: the LOD chain).
-    pub technique: TechniqueKind,
+    pub technique: String,
     /// The `auto` chain, in scene-file spelling (`"geometry:0-60"`).
     pub lod_chain: Vec<String>,
     /// Per species: fraction of its placed trees that are drawn (0–1).
@@ -94,7 +94,7 @@ impl Viewer {
             render_scale: 1.0,
             vsync: true,
             build: BuildSettings {
-                technique: options.technique,
+                technique: options.technique.clone(),
                 lod_chain: scene.lod_chain.clone(),
                 density: vec![1.0; scene.species.len()],
             },
@@ -250,7 +250,7 @@ impl Viewer {
             }
         };
         let mut options = self.renderer.options().clone();
-        options.technique = TechniqueKind::Geometry;
+        options.technique = "geometry".into();
         options.spp = 16;
         options.debug = DebugView::None;
         self.comparison.start(
@@ -273,7 +273,7 @@ fn make_renderer(
     s: &Settings,
 ) -> anyhow::Result<Renderer> {
     let options = RenderOptions {
-        technique: s.build.technique,
+        technique: s.build.technique.clone(),
         shadows: s.shadows,
         exposure: s.exposure,
         debug: s.debug,
@@ -327,7 +327,7 @@ mod tests {
         let mut density = vec![1.0; species];
         density[0] = 0.25;
         let b = BuildSettings {
-            technique: TechniqueKind::Geometry,
+            technique: "geometry".into(),
             lod_chain: vec!["geometry:0-60".into()],
             density,
         };
