@@ -297,8 +297,9 @@ fn draw_settings_reuse_the_cache_and_bake_settings_rebake() {
                 cache: CachePolicy::Dir(dir.clone()),
                 ..Default::default()
             };
-            let r = sylvan_render::Renderer::new(&gpu, &scene, std::slice::from_ref(&plant), &options)
-                .expect("renderer");
+            let r =
+                sylvan_render::Renderer::new(&gpu, &scene, std::slice::from_ref(&plant), &options)
+                    .expect("renderer");
             r.bake_reports().iter().all(|b| b.from_cache)
         };
         from_cache("");

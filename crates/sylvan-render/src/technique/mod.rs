@@ -22,6 +22,7 @@ pub(crate) mod common;
 pub mod geometry;
 pub mod hbt;
 pub mod lod;
+pub mod octahedral;
 pub mod params;
 pub mod registry;
 

@@ -79,6 +79,7 @@ pub static REGISTRY: &[Entry] = &[
     super::geometry::ENTRY,
     super::boxtree::ENTRY,
     super::hbt::ENTRY,
+    super::octahedral::ENTRY,
     super::lod::ENTRY,
 ];
 

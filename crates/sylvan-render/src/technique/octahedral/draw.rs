@@ -1,0 +1,334 @@
+//! The GPU side of `octahedral`: atlas and view upload, the per-frame instance list (camera
+//! pass sorted back to front), and the passes.
+
+use super::bake::{self as oct, OctahedralBaked};
+use super::{OctahedralBakeParams, OctahedralDrawParams, SHADOW_OFFSET};
+use crate::RenderError;
+use crate::bake::image::TileLevel;
+use crate::frame::{CASCADES, FrameResources};
+use crate::pipeline;
+use crate::technique::common::{self, Growable, TileAtlas};
+use crate::technique::geometry::LEAF_TRANSLUCENCY;
+use crate::technique::{DrawContext, DrawCounts, FrameInput, Technique};
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use std::ops::Range;
+use sylvan_gpu::{Gpu, layout};
+use sylvan_plant::Plant;
+use wgpu::util::DeviceExt;
+
+const PASSES: usize = 1 + CASCADES;
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuOctSpecies {
+    centre_radius: [f32; 4],
+    bbox_min: [f32; 4],
+    bbox_max: [f32; 4],
+    info: [u32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuOctView {
+    u: [f32; 4],
+    v: [f32; 4],
+    f: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuOctAtlas {
+    tiles: [u32; 4],
+    params: [f32; 4],
+    draw: [f32; 4],
+}
+
+/// One tree's quad (vertex locations 4–6, per instance).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable, Debug, PartialEq)]
+struct GpuOctInstance {
+    base_scale: [f32; 4],
+    rot: [f32; 4],
+    species: u32,
+    _pad: [u32; 3],
+}
+
+impl GpuOctInstance {
+    const LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+        array_stride: std::mem::size_of::<GpuOctInstance>() as u64,
+        step_mode: wgpu::VertexStepMode::Instance,
+        attributes: &wgpu::vertex_attr_array![4 => Float32x4, 5 => Float32x4, 6 => Uint32],
+    };
+}
+
+/// The prepared hemi-octahedral impostor technique.
+pub struct Octahedral {
+    /// Per species: the model-space centre of its frames (for the back-to-front sort).
+    centres: Vec<Vec3>,
+    pipeline: wgpu::RenderPipeline,
+    shadow_pipeline: wgpu::RenderPipeline,
+    bind: wgpu::BindGroup,
+    static_bytes: u64,
+    // Per frame (reused; nothing is allocated once the vectors have grown).
+    instances: Growable,
+    staging: Vec<GpuOctInstance>,
+    sort: Vec<(f32, GpuOctInstance)>,
+    ranges: [Range<u32>; PASSES],
+}
+
+/// The grid's view frames (image axes; shared by every species, whose frames differ only by
+/// centre and radius).
+fn views(grid: u32) -> Vec<GpuOctView> {
+    (0..grid * grid)
+        .map(|k| {
+            let d = oct::grid_direction(grid, k % grid, k / grid);
+            let f = crate::bake::views::PlaneFrame::for_sphere(d, Vec3::ZERO, 1.0);
+            GpuOctView {
+                u: f.u.extend(0.0).to_array(),
+                v: f.v.extend(0.0).to_array(),
+                f: f.f.extend(0.0).to_array(),
+            }
+        })
+        .collect()
+}
+
+/// `pick(level)` of every tile's mip chain, as [`TileAtlas::upload`] takes them.
+fn chains(tiles: &[&Vec<TileLevel>], pick: fn(&TileLevel) -> &Vec<u8>) -> Vec<Vec<Vec<u8>>> {
+    tiles
+        .iter()
+        .map(|levels| levels.iter().map(|l| pick(l).clone()).collect())
+        .collect()
+}
+
+impl Octahedral {
+    /// Uploads every species' views into one atlas and builds the pipelines.
+    pub fn new(
+        gpu: &Gpu,
+        frame: &FrameResources,
+        plants: &[Plant],
+        baked: &[OctahedralBaked],
+        bake: &OctahedralBakeParams,
+        draw: &OctahedralDrawParams,
+    ) -> Result<Self, RenderError> {
+        let (grid, tile) = (bake.grid, bake.tile);
+        if baked.len() != plants.len() {
+            return Err(RenderError::Plant(format!(
+                "{} octahedral bakes for {} plants",
+                baked.len(),
+                plants.len()
+            )));
+        }
+        let mut species = Vec::with_capacity(plants.len());
+        let mut tiles: Vec<&Vec<TileLevel>> = Vec::new();
+        for (plant, b) in plants.iter().zip(baked) {
+            if b.grid != grid || b.tile != tile {
+                return Err(RenderError::Plant(format!(
+                    "{}: octahedral bake has grid {} tile {}, the parameters grid {grid} tile {tile} — re-bake",
+                    plant.name, b.grid, b.tile
+                )));
+            }
+            species.push(GpuOctSpecies {
+                centre_radius: Vec3::from(b.centre).extend(b.radius).to_array(),
+                bbox_min: Vec3::from(plant.bbox_min).extend(0.0).to_array(),
+                bbox_max: Vec3::from(plant.bbox_max).extend(0.0).to_array(),
+                info: [tiles.len() as u32, 0, 0, 0],
+            });
+            tiles.extend(b.tiles.iter());
+        }
+        let upload = |label, format, data: Vec<Vec<Vec<u8>>>| {
+            let refs: Vec<&[Vec<u8>]> = data.iter().map(Vec::as_slice).collect();
+            TileAtlas::upload(gpu, label, format, tile, &refs)
+        };
+        let color = upload(
+            "octahedral_atlas_color",
+            wgpu::TextureFormat::Rgba8UnormSrgb,
+            chains(&tiles, |l| &l.color),
+        )?;
+        let normal = upload(
+            "octahedral_atlas_normal",
+            wgpu::TextureFormat::Rgba8Unorm,
+            chains(&tiles, |l| &l.normal),
+        )?;
+        let atlas = GpuOctAtlas {
+            tiles: [tile, color.per_row, color.per_layer, grid],
+            params: [
+                LEAF_TRANSLUCENCY,
+                1.0 / color.per_row as f32,
+                1.0 / color.rows as f32,
+                0.0,
+            ],
+            draw: [
+                draw.parallax_steps as f32,
+                draw.views as f32,
+                SHADOW_OFFSET,
+                0.0,
+            ],
+        };
+        let device = &gpu.device;
+        let storage = |label, contents: &[u8]| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage: wgpu::BufferUsages::STORAGE,
+            })
+        };
+        let species_buffer = storage("octahedral_species", bytemuck::cast_slice(&species));
+        let view_buffer = storage("octahedral_views", bytemuck::cast_slice(&views(grid)));
+        let atlas_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("octahedral_atlas"),
+            contents: bytemuck::bytes_of(&atlas),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let sampler = common::trilinear_sampler(gpu, "octahedral_sampler");
+        let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
+        let bind_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("octahedral_layout"),
+            entries: &[
+                layout::storage(0, vf),
+                layout::storage(1, vf),
+                layout::atlas(2),
+                layout::atlas(3),
+                layout::sampler(
+                    4,
+                    wgpu::ShaderStages::FRAGMENT,
+                    wgpu::SamplerBindingType::Filtering,
+                ),
+                layout::uniform(5, vf),
+            ],
+        });
+        let (cv, nv) = (color.view(), normal.view());
+        let bind = common::bind_group(
+            gpu,
+            "octahedral_bind",
+            &bind_layout,
+            &[
+                species_buffer.as_entire_binding(),
+                view_buffer.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&cv),
+                wgpu::BindingResource::TextureView(&nv),
+                wgpu::BindingResource::Sampler(&sampler),
+                atlas_buffer.as_entire_binding(),
+            ],
+        );
+        let module = sylvan_gpu::shader(
+            gpu,
+            "octahedral",
+            &pipeline::with_frame(include_str!("octahedral.wgsl")),
+        );
+        let (pipeline, shadow_pipeline) = common::image_pipelines(
+            gpu,
+            frame,
+            &module,
+            "octahedral",
+            &[None, Some(GpuOctInstance::LAYOUT)],
+            &bind_layout,
+        );
+        let static_bytes = color.bytes
+            + normal.bytes
+            + species_buffer.size()
+            + view_buffer.size()
+            + atlas_buffer.size();
+        Ok(Self {
+            centres: baked.iter().map(|b| Vec3::from(b.centre)).collect(),
+            pipeline,
+            shadow_pipeline,
+            bind,
+            static_bytes,
+            instances: Growable::new(gpu, "octahedral_instances", 1 << 16),
+            staging: Vec::new(),
+            sort: Vec::new(),
+            ranges: std::array::from_fn(|_| 0..0),
+        })
+    }
+
+    /// Per frame: every culled tree's quad, the camera pass sorted back to front, uploaded.
+    pub fn update(&mut self, gpu: &Gpu, input: &FrameInput<'_>) -> Result<(), RenderError> {
+        self.staging.clear();
+        for pass in 0..PASSES {
+            self.sort.clear();
+            for (s, centre) in self.centres.iter().enumerate() {
+                for rec in input.instances.records(pass, s) {
+                    let [x, y, z, scale] = rec.base_scale;
+                    let (c, sn) = (rec.rot[0], rec.rot[1]);
+                    let q = *centre * scale;
+                    let world = Vec3::new(x + c * q.x + sn * q.z, y + q.y, z - sn * q.x + c * q.z);
+                    self.sort.push((
+                        world.distance_squared(input.eye),
+                        GpuOctInstance {
+                            base_scale: rec.base_scale,
+                            rot: rec.rot,
+                            species: s as u32,
+                            _pad: [0; 3],
+                        },
+                    ));
+                }
+            }
+            if pass == 0 {
+                // Back to front: premultiplied "over" needs the far trees first.
+                self.sort.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
+            }
+            let start = self.staging.len() as u32;
+            self.staging.extend(self.sort.iter().map(|x| x.1));
+            self.ranges[pass] = start..self.staging.len() as u32;
+        }
+        self.instances
+            .write(gpu, bytemuck::cast_slice(&self.staging))
+    }
+}
+
+impl Technique for Octahedral {
+    fn name(&self) -> &'static str {
+        super::ENTRY.name
+    }
+
+    fn prepare_frame(
+        &mut self,
+        gpu: &Gpu,
+        _: &mut wgpu::CommandEncoder,
+        input: &FrameInput<'_>,
+    ) -> Result<(), RenderError> {
+        self.update(gpu, input)
+    }
+
+    fn draw(&self, pass: &mut wgpu::RenderPass<'_>, ctx: &DrawContext<'_>) -> DrawCounts {
+        let pipeline = match ctx.shadow_cascade() {
+            None => &self.pipeline,
+            Some(_) => &self.shadow_pipeline,
+        };
+        self.record(pass, ctx, pipeline)
+    }
+
+    fn bytes(&self) -> u64 {
+        self.static_bytes + self.instances.buffer.size()
+    }
+
+    fn reallocations(&self) -> u32 {
+        self.instances.reallocations
+    }
+}
+
+impl Octahedral {
+    /// One instanced draw of every tree of every species in this pass.
+    fn record(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        ctx: &DrawContext<'_>,
+        pipeline: &wgpu::RenderPipeline,
+    ) -> DrawCounts {
+        let r = self.ranges[ctx.pass].clone();
+        if r.is_empty() {
+            return DrawCounts::default();
+        }
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, ctx.frame_bind, &[]);
+        pass.set_bind_group(1, &self.bind, &[]);
+        pass.set_vertex_buffer(1, self.instances.buffer.slice(..));
+        let n = (r.end - r.start) as u64;
+        pass.draw(0..6, r);
+        DrawCounts {
+            draw_calls: 1,
+            triangles: n * 2,
+        }
+    }
+}
