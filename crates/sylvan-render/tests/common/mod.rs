@@ -3,6 +3,8 @@
 
 #![allow(dead_code)]
 
+pub mod hbt;
+
 use glam::Vec3;
 use sylvan_gpu::Gpu;
 use sylvan_plant::{LeafTexture, Mesh, Plant};

@@ -1,0 +1,99 @@
+//! [`DIRECTIONS_WGSL`]: the table lookup of [`super::DirectionLut::lookup`] for shaders, and
+//! its naga validation.
+
+/// WGSL of [`DirectionLut::lookup`](super::DirectionLut::lookup): `fn dir_lookup(d: vec3<f32>) -> DirLookup` returns the 3
+/// sample indices and weights for direction `d` (any length). Put
+/// [`DirectionLut::bindings_wgsl`](super::DirectionLut::bindings_wgsl) (or equivalent declarations of `dir_texels`, `dir_faces`,
+/// `dir_samples`) before it; the table's resolution comes from `arrayLength(&dir_texels)`.
+/// Zero, NaN and infinite `d` give cell 0 with weights (1, 0, 0) where the driver keeps NaN
+/// comparisons IEEE. One shader can hold one table (names are fixed).
+pub const DIRECTIONS_WGSL: &str = r#"
+// MNP01 §4.1 direction table lookup (sylvan_render::directions).
+const DIR_NO_FACE: u32 = 0xffffu;
+const DIR_NO_SCORE: f32 = -3.4e38;
+const DIR_MAX_COMPONENT: f32 = 3.4e38;
+
+struct DirLookup {
+    indices: vec3<u32>,
+    weights: vec3<f32>,
+}
+
+fn dir_octahedral_uv(d: vec3<f32>) -> vec2<f32> {
+    let p = d / (abs(d.x) + abs(d.y) + abs(d.z));
+    if p.z >= 0.0 {
+        return p.xy;
+    }
+    let s = select(vec2<f32>(-1.0), vec2<f32>(1.0), p.xy >= vec2<f32>(0.0));
+    return (vec2<f32>(1.0) - abs(p.yx)) * s;
+}
+
+fn dir_cell_weights(d: vec3<f32>, face: vec3<u32>) -> vec3<f32> {
+    let a = dir_samples[face.x].xyz;
+    let b = dir_samples[face.y].xyz;
+    let c = dir_samples[face.z].xyz;
+    let w = vec3<f32>(dot(d, cross(b, c)), dot(d, cross(c, a)), dot(d, cross(a, b)));
+    let sum = w.x + w.y + w.z;
+    if sum > 0.0 {
+        return w / sum;
+    }
+    return vec3<f32>(DIR_NO_SCORE);
+}
+
+fn dir_lookup(d_in: vec3<f32>) -> DirLookup {
+    var out = DirLookup(dir_faces[0].xyz, vec3<f32>(1.0, 0.0, 0.0));
+    let m = max(max(abs(d_in.x), abs(d_in.y)), abs(d_in.z));
+    if !(m > 0.0 && m <= DIR_MAX_COMPONENT) {
+        return out;
+    }
+    let d = normalize(d_in / m);
+    let r = u32(round(sqrt(f32(arrayLength(&dir_texels)))));
+    let t = floor((dir_octahedral_uv(d) * 0.5 + 0.5) * f32(r));
+    let texel_xy = vec2<u32>(clamp(t, vec2<f32>(0.0), vec2<f32>(f32(r - 1u))));
+    let texel = dir_texels[texel_xy.y * r + texel_xy.x];
+    var best = DIR_NO_SCORE;
+    for (var k = 0u; k < 8u; k++) {
+        let id = (texel[k >> 1u] >> ((k & 1u) * 16u)) & 0xffffu;
+        if id == DIR_NO_FACE {
+            break;
+        }
+        let face = dir_faces[id].xyz;
+        let w = dir_cell_weights(d, face);
+        let score = min(w.x, min(w.y, w.z));
+        if score > best {
+            best = score;
+            out = DirLookup(face, w);
+        }
+    }
+    let w = max(out.weights, vec3<f32>(0.0));
+    let sum = w.x + w.y + w.z;
+    out.weights = select(vec3<f32>(1.0, 0.0, 0.0), w / sum, sum > 0.0);
+    return out;
+}
+"#;
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::directions::DirectionLut;
+
+    #[test]
+    fn wgsl_validates() {
+        let source = format!(
+            "{}{DIRECTIONS_WGSL}\n\
+             @group(0) @binding(3) var<storage, read_write> out: array<vec4<f32>>;\n\
+             @compute @workgroup_size(64)\n\
+             fn main(@builtin(global_invocation_id) id: vec3<u32>) {{\n\
+                 let l = dir_lookup(out[id.x].xyz);\n\
+                 out[id.x] = vec4<f32>(l.weights, f32(l.indices.x + l.indices.y + l.indices.z));\n\
+             }}\n",
+            DirectionLut::bindings_wgsl(0, 0)
+        );
+        let module = naga::front::wgsl::parse_str(&source)
+            .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
+        naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::default(),
+        )
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
+    }
+}
