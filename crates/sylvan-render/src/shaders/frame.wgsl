@@ -119,6 +119,43 @@ fn hash13(p: vec3<f32>) -> f32 {
     return fract((q.x + q.y) * q.z);
 }
 
+// A tree instance (`GpuTreeInstance` in `instances.rs`), the one per-tree vertex layout: every
+// per-tree technique's vertex entry points take it as their second input.
+struct TreeInstance {
+    // xyz: trunk base (world); w: uniform scale from plant units to metres.
+    @location(4) base_scale: vec4<f32>,
+    // x: cos(rotation about Y); y: sin(rotation); z: tint seed in [0, 1); w: presence in [0, 1]
+    // (1: whole; less during a level-of-detail transition).
+    @location(5) rot: vec4<f32>,
+};
+
+// A model-space direction in world space (the instance's rotation about Y).
+fn instance_dir_to_world(d: vec3<f32>, rot: vec4<f32>) -> vec3<f32> {
+    return vec3<f32>(rot.x * d.x + rot.y * d.z, d.y, -rot.y * d.x + rot.x * d.z);
+}
+
+// A world direction in model space (the inverse rotation).
+fn instance_dir_to_model(d: vec3<f32>, rot: vec4<f32>) -> vec3<f32> {
+    return vec3<f32>(rot.x * d.x - rot.y * d.z, d.y, rot.y * d.x + rot.x * d.z);
+}
+
+// A model-space point (plant units) in world space.
+fn instance_to_world(p: vec3<f32>, base_scale: vec4<f32>, rot: vec4<f32>) -> vec3<f32> {
+    return instance_dir_to_world(p * base_scale.w, rot) + base_scale.xyz;
+}
+
+// A world point in model space (plant units).
+fn instance_to_model(p: vec3<f32>, base_scale: vec4<f32>, rot: vec4<f32>) -> vec3<f32> {
+    return instance_dir_to_model(p - base_scale.xyz, rot) / base_scale.w;
+}
+
+// The opacity of a texel of coverage `alpha` drawn with presence `presence` during a
+// level-of-detail cross-fade: by optical depth, so two levels fading over each other keep the
+// object's coverage (`1 − (1 − α)^w`; α capped below 1 so a fading opaque texel still fades).
+fn presence_alpha(alpha: f32, presence: f32) -> f32 {
+    return 1.0 - pow(1.0 - min(alpha, 0.995), presence);
+}
+
 // Debug views (`frame.shadow_params.z`, `DebugView` in Rust): 0 none, 1 colour by technique,
 // 2 colour by shadow cascade.
 const DEBUG_TECHNIQUE: u32 = 1u;

@@ -8,6 +8,21 @@ use crate::frame::FrameResources;
 use crate::pipeline::{self, PassKind, PipelineSpec};
 use sylvan_gpu::Gpu;
 
+/// Hermite smoothstep of `t` clamped to [0, 1]: 0 at 0, 1 at 1, zero slope at both ends.
+/// Every level-of-detail cross-fade on the CPU uses it (WGSL has its own built-in).
+pub(crate) fn smoothstep01(t: f32) -> f32 {
+    let t = t.clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// [`smoothstep01`] from `e0` to `e1`; with `e1 <= e0` a hard step at `e0`.
+pub(crate) fn smoothstep(e0: f32, e1: f32, x: f32) -> f32 {
+    if e1 <= e0 {
+        return if x >= e0 { 1.0 } else { 0.0 };
+    }
+    smoothstep01((x - e0) / (e1 - e0))
+}
+
 /// Premultiplied colour composited "over" what is already drawn.
 pub(crate) const PREMULTIPLIED_OVER: wgpu::BlendState = wgpu::BlendState {
     color: wgpu::BlendComponent {

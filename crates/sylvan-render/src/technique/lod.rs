@@ -12,6 +12,7 @@
 //! frame (no allocation), and its technique is built once like a stand-alone one, from the
 //! registry.
 
+use super::common::smoothstep;
 use super::params::{self, NoParams};
 use super::registry::{self, Entry, Kind};
 use super::{BandRange, BuildContext, Built, DrawContext, DrawCounts, FrameInput, Technique};
@@ -161,11 +162,6 @@ pub fn parse_chain(entries: &[String]) -> Result<Vec<Band>, RenderError> {
     }
     check_bands(&bands)?;
     Ok(bands)
-}
-
-fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
-    let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
-    t * t * (3.0 - 2.0 * t)
 }
 
 /// Presence of band `i` for a tree at `distance`: 1 inside the band, cross-fading over ±FADE

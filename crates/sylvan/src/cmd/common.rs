@@ -83,6 +83,20 @@ pub struct Resolved {
     pub options: RenderOptions,
 }
 
+/// An error and its causes on one line, without repeating a cause already in the message (as
+/// `main` prints errors and the viewer shows them).
+pub fn one_line(e: &anyhow::Error) -> String {
+    let mut out = e.to_string();
+    for cause in e.chain().skip(1) {
+        let c = cause.to_string();
+        if !out.contains(&c) {
+            out.push_str(": ");
+            out.push_str(&c);
+        }
+    }
+    out.replace('\n', " ")
+}
+
 /// Parses `WxH`.
 pub fn parse_size(s: &str) -> Result<(u32, u32)> {
     let bad = || {

@@ -1,50 +1,11 @@
 // Technique `boxtree` (LCV04 §4): a box's images drawn on its planes through the box centre,
 // lit per texel with the same model as the geometry (albedo, normal and depth are baked; light
 // is not), blended back to front with premultiplied alpha.
-
-const MAX_PLANES: u32 = 6u;
-
-struct Plane {
-    // xyz: plane centre (model space); w: half extent along f.
-    centre: vec4<f32>,
-    // xyz: image right axis; w: half extent along u.
-    u: vec4<f32>,
-    // xyz: image up axis; w: half extent along v.
-    v: vec4<f32>,
-    // xyz: plane normal (the front image is seen from +f).
-    f: vec4<f32>,
-};
-
-struct Box {
-    planes: array<Plane, 6>,
-    // The plant's bounding box (for the crown occlusion term, as in the geometry).
-    plant_min: vec4<f32>,
-    plant_max: vec4<f32>,
-    // x: first tile; y: images per plane (1 or 2); z: planes; w: bit 0 set for a billboard
-    // (one plane turned about the vertical axis towards the viewer), bits 1…: the box's depth
-    // in the box tree (for the debug view).
-    info: vec4<u32>,
-};
-
-struct Atlas {
-    // x: tile texels; y: tiles per row; z: tiles per layer; w: unused.
-    tiles: vec4<u32>,
-    // x: leaf translucency; y: 1 / tiles per row; z: 1 / rows of tiles per layer.
-    params: vec4<f32>,
-};
-
-@group(1) @binding(0) var<storage, read> boxes: array<Box>;
-@group(1) @binding(1) var atlas_color: texture_2d_array<f32>;
-@group(1) @binding(2) var atlas_normal: texture_2d_array<f32>;
-@group(1) @binding(3) var atlas_sampler: sampler;
-@group(1) @binding(4) var<uniform> atlas: Atlas;
+// Bind group 1: `bindings.wgsl`.
 
 struct ImpostorIn {
     @builtin(vertex_index) vertex: u32,
-    // Instance: xyz trunk base, w uniform scale.
-    @location(4) base_scale: vec4<f32>,
-    // Instance: x cos(rotation), y sin(rotation), z tint seed, w presence.
-    @location(5) rot: vec4<f32>,
+    // With the tree instance (`TreeInstance`, locations 4 and 5): the box drawn.
     @location(6) box_index: u32,
 };
 
@@ -66,25 +27,11 @@ struct ImpostorOut {
     @location(7) lod: f32,
 };
 
-fn to_world(p: vec3<f32>, base_scale: vec4<f32>, rot: vec4<f32>) -> vec3<f32> {
-    let q = p * base_scale.w;
-    return vec3<f32>(rot.x * q.x + rot.y * q.z, q.y, -rot.y * q.x + rot.x * q.z) + base_scale.xyz;
-}
-
-// World direction → model space (inverse rotation about Y).
-fn to_model_dir(d: vec3<f32>, rot: vec4<f32>) -> vec3<f32> {
-    return vec3<f32>(rot.x * d.x - rot.y * d.z, d.y, rot.y * d.x + rot.x * d.z);
-}
-
-fn to_world_dir(d: vec3<f32>, rot: vec4<f32>) -> vec3<f32> {
-    return vec3<f32>(rot.x * d.x + rot.y * d.z, d.y, -rot.y * d.x + rot.x * d.z);
-}
-
 // One plane's corner; `toward` is the model-space unit direction the box is seen from (the
 // eye, or the sun for shadows). Each plane's optical depth is weighted by (toward·f)², the
 // weights normalised to sum to 1, so a plane seen edge-on vanishes and one seen face-on
 // carries the whole box (exact along the baked directions).
-fn impostor_vertex(in: ImpostorIn, toward_world: vec3<f32>, view_proj: mat4x4<f32>, is_dir: bool) -> ImpostorOut {
+fn impostor_vertex(in: ImpostorIn, inst: TreeInstance, toward_world: vec3<f32>, view_proj: mat4x4<f32>, is_dir: bool) -> ImpostorOut {
     var out: ImpostorOut;
     let b = boxes[in.box_index];
     let plane = in.vertex / 6u;
@@ -96,9 +43,9 @@ fn impostor_vertex(in: ImpostorIn, toward_world: vec3<f32>, view_proj: mat4x4<f3
     var p = b.planes[plane];
     var toward = toward_world;
     if (!is_dir) {
-        toward = toward_world - to_world(b.planes[0].centre.xyz, in.base_scale, in.rot);
+        toward = toward_world - instance_to_world(b.planes[0].centre.xyz, inst.base_scale, inst.rot);
     }
-    let d = normalize(to_model_dir(toward, in.rot));
+    let d = normalize(instance_dir_to_model(toward, inst.rot));
     var w = 1.0;
     var c = 1.0;
     if ((b.info.w & 1u) == 1u) {
@@ -118,7 +65,7 @@ fn impostor_vertex(in: ImpostorIn, toward_world: vec3<f32>, view_proj: mat4x4<f3
     }
     // A plane seen (almost) edge-on contributes nothing: skip its fragments entirely. Shadow
     // maps (3×3 PCF, stochastic coverage) skip planes carrying under a tenth of the box.
-    if (w * in.rot.w < select(0.01, 0.1, is_dir)) {
+    if (w * inst.rot.w < select(0.01, 0.1, is_dir)) {
         out.pos = vec4<f32>(0.0, 0.0, -2.0, 1.0);
         return out;
     }
@@ -127,11 +74,11 @@ fn impostor_vertex(in: ImpostorIn, toward_world: vec3<f32>, view_proj: mat4x4<f3
         vec2<f32>(0.0, 1.0), vec2<f32>(1.0, 0.0), vec2<f32>(0.0, 0.0),
     )[corner];
     let model = p.centre.xyz + p.u.xyz * ((2.0 * st.x - 1.0) * p.u.w) + p.v.xyz * ((1.0 - 2.0 * st.y) * p.v.w);
-    let world = to_world(model, in.base_scale, in.rot);
+    let world = instance_to_world(model, inst.base_scale, inst.rot);
     out.pos = view_proj * vec4<f32>(world, 1.0);
     // A texel is 2·half/tile metres; a pixel at distance D covers D / pixels_per_metre metres,
     // stretched by 1/|cos| across a plane seen obliquely.
-    let texel_m = 2.0 * max(p.u.w, p.v.w) * in.base_scale.w / f32(atlas.tiles.x);
+    let texel_m = 2.0 * max(p.u.w, p.v.w) * inst.base_scale.w / f32(atlas.tiles.x);
     var pixel_m = 0.0;
     if (is_dir) {
         // Shadow maps: orthographic, one texel per shadow-map texel of the first cascade.
@@ -145,8 +92,8 @@ fn impostor_vertex(in: ImpostorIn, toward_world: vec3<f32>, view_proj: mat4x4<f3
     out.world = world;
     out.model = model;
     out.ids = vec3<u32>(in.box_index, plane, select(0u, 1u, c >= 0.0));
-    out.weight = vec4<f32>(w * in.rot.w, in.rot.z, in.rot.x, in.rot.y);
-    out.scale = in.base_scale.w;
+    out.weight = vec4<f32>(w * inst.rot.w, inst.rot.z, inst.rot.x, inst.rot.y);
+    out.scale = inst.base_scale.w;
     out.axis = p.f.xyz;
     return out;
 }
@@ -190,14 +137,9 @@ fn fetch(in: ImpostorOut) -> Texel {
     return t;
 }
 
-// Opacity of this plane's texel: the texel's optical depth scaled by the plane's weight.
-fn plane_alpha(alpha: f32, weight: f32) -> f32 {
-    return 1.0 - pow(1.0 - min(alpha, 0.995), weight);
-}
-
 @vertex
-fn vs_impostor(in: ImpostorIn) -> ImpostorOut {
-    return impostor_vertex(in, frame.camera.xyz, frame.view_proj, false);
+fn vs_impostor(in: ImpostorIn, inst: TreeInstance) -> ImpostorOut {
+    return impostor_vertex(in, inst, frame.camera.xyz, frame.view_proj, false);
 }
 
 @fragment
@@ -207,7 +149,8 @@ fn fs_impostor(in: ImpostorOut) -> @location(0) vec4<f32> {
     if (alpha < 0.004) {
         discard;
     }
-    let a = plane_alpha(alpha, in.weight.x);
+    // The plane's opacity: the texel's optical depth scaled by the plane's weight × presence.
+    let a = presence_alpha(alpha, in.weight.x);
     if (a < 0.002) {
         discard;
     }
@@ -227,8 +170,8 @@ fn fs_impostor(in: ImpostorOut) -> @location(0) vec4<f32> {
     let side = select(-1.0, 1.0, t.image != 0u);
     let model = in.model + f * side * p.centre.w * (1.0 - 2.0 * t.normal_depth.w);
     let rot = vec4<f32>(in.weight.z, in.weight.w, 0.0, 0.0);
-    let world = in.world + to_world_dir(model - in.model, rot) * in.scale;
-    let nw = normalize(to_world_dir(n, rot));
+    let world = in.world + instance_dir_to_world(model - in.model, rot) * in.scale;
+    let nw = normalize(instance_dir_to_world(n, rot));
 
     let tint = 0.85 + 0.3 * in.weight.y;
     let albedo = t.color.rgb * vec3<f32>(tint, mix(tint, 1.0, 0.5), 1.0);
@@ -249,14 +192,14 @@ fn fs_impostor(in: ImpostorOut) -> @location(0) vec4<f32> {
 // Stochastic (screen-door) opacity for the shadow maps: a texel occludes with probability
 // equal to its plane opacity seen from the sun; the 3×3 PCF turns that into soft shadow.
 @vertex
-fn vs_impostor_shadow(in: ImpostorIn) -> ImpostorOut {
-    return impostor_vertex(in, frame.sun_dir.xyz, frame.view_proj, true);
+fn vs_impostor_shadow(in: ImpostorIn, inst: TreeInstance) -> ImpostorOut {
+    return impostor_vertex(in, inst, frame.sun_dir.xyz, frame.view_proj, true);
 }
 
 @fragment
 fn fs_impostor_shadow(in: ImpostorOut) {
     let t = fetch(in);
-    let a = plane_alpha(t.color.a, in.weight.x);
+    let a = presence_alpha(t.color.a, in.weight.x);
     if (a <= hash13(vec3<f32>(in.pos.xy, f32(in.ids.y) * 7.0))) {
         discard;
     }

@@ -7,7 +7,6 @@ use crate::RenderError;
 use crate::bake::views::PlaneLayout;
 use crate::frame::{CASCADES, FrameResources};
 use crate::instances::GpuTreeInstance;
-use crate::pipeline;
 use crate::technique::common::{self, Growable, TileAtlas};
 use crate::technique::geometry::{LEAF_TRANSLUCENCY, MeshPipelines, SpeciesMeshes};
 use crate::technique::{DrawContext, DrawCounts, FrameInput, Technique};
@@ -290,11 +289,7 @@ impl BoxTree {
                 atlas_buffer.as_entire_binding(),
             ],
         );
-        let module = sylvan_gpu::shader(
-            gpu,
-            "boxtree",
-            &pipeline::with_frame(include_str!("boxtree.wgsl")),
-        );
+        let module = sylvan_gpu::shader(gpu, "boxtree", &super::shader_source());
         let (impostor, impostor_shadow) = common::image_pipelines(
             gpu,
             frame,

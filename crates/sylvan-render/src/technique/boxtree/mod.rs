@@ -257,10 +257,14 @@ pub const ENTRY: Entry = Entry {
             fields,
         })
     }),
-    shaders: || {
-        vec![(
-            "boxtree",
-            crate::pipeline::with_frame(include_str!("boxtree.wgsl")),
-        )]
-    },
+    shaders: || vec![("boxtree", shader_source())],
 };
+
+/// The WGSL of `boxtree` as compiled: the frame's group 0, `bindings.wgsl` (group 1), then
+/// `boxtree.wgsl`.
+pub(crate) fn shader_source() -> String {
+    crate::pipeline::with_frame(concat!(
+        include_str!("bindings.wgsl"),
+        include_str!("boxtree.wgsl")
+    ))
+}

@@ -73,8 +73,7 @@ pub const SNAP: f32 = 0.02;
 /// the ratio is the distance over the box's LOD distance (LCV04 §4.1: where one of its texels
 /// covers one pixel).
 pub fn impostor_presence(ratio: f32, band: f32) -> f32 {
-    let t = ((ratio - 1.0) / band.max(1e-3)).clamp(0.0, 1.0);
-    t * t * (3.0 - 2.0 * t)
+    crate::technique::common::smoothstep01((ratio - 1.0) / band.max(1e-3))
 }
 
 /// Walks one tree's box tree. `impostor(box, presence, distance)` is called for each box drawn

@@ -1,26 +1,12 @@
 // Technique `geometry`: full tree meshes, instanced per species. Wood is opaque; leaves are
 // alpha-tested and two-sided, lit by the sun from the front and by transmission from behind.
-
-struct Species {
-    bbox_min: vec4<f32>,
-    // xyz: bbox max; w: leaf translucency.
-    bbox_max: vec4<f32>,
-};
-
-@group(1) @binding(0) var leaf_texture: texture_2d<f32>;
-@group(1) @binding(1) var leaf_sampler: sampler;
-@group(1) @binding(2) var<uniform> species: Species;
+// Bind group 1: `bindings.wgsl`.
 
 struct PlantIn {
     @location(0) position: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) uv: vec2<f32>,
     @location(3) color: vec3<f32>,
-    // Instance: xyz trunk base, w uniform scale.
-    @location(4) base_scale: vec4<f32>,
-    // Instance: x cos(rotation), y sin(rotation), z per-tree tint seed, w presence in [0, 1]
-    // (1: all leaves; less: a level-of-detail transition keeps that fraction of leaves).
-    @location(5) rot: vec4<f32>,
     @builtin(vertex_index) vertex: u32,
 };
 
@@ -42,29 +28,28 @@ fn leaf_dropped(keep: vec2<f32>) -> bool {
     return keep.y >= keep.x;
 }
 
-fn instance_transform(in: PlantIn) -> PlantOut {
-    let c = in.rot.x;
-    let s = in.rot.y;
-    let p = in.position * in.base_scale.w;
-    let world = vec3<f32>(c * p.x + s * p.z, p.y, -s * p.x + c * p.z) + in.base_scale.xyz;
-    let n = vec3<f32>(c * in.normal.x + s * in.normal.z, in.normal.y, -s * in.normal.x + c * in.normal.z);
+// The instance's presence (`inst.rot.w`) keeps that fraction of the leaves during a
+// level-of-detail transition.
+fn instance_transform(in: PlantIn, inst: TreeInstance) -> PlantOut {
+    let world = instance_to_world(in.position, inst.base_scale, inst.rot);
+    let n = instance_dir_to_world(in.normal, inst.rot);
     var out: PlantOut;
     out.pos = frame.view_proj * vec4<f32>(world, 1.0);
     out.world = world;
     out.normal = n;
     out.uv = in.uv;
-    let tint = 0.85 + 0.3 * in.rot.z;
+    let tint = 0.85 + 0.3 * inst.rot.z;
     out.color = in.color * vec3<f32>(tint, mix(tint, 1.0, 0.5), 1.0);
     // Crown self-occlusion for the sky term.
     out.ao = crown_occlusion(in.position, species.bbox_min.xyz, species.bbox_max.xyz);
     let leaf = f32(in.vertex / 4u);
-    out.keep = vec2<f32>(in.rot.w, hash13(vec3<f32>(leaf, leaf * 0.37 + 11.0, in.rot.z * 97.0)));
+    out.keep = vec2<f32>(inst.rot.w, hash13(vec3<f32>(leaf, leaf * 0.37 + 11.0, inst.rot.z * 97.0)));
     return out;
 }
 
 @vertex
-fn vs_plant(in: PlantIn) -> PlantOut {
-    return instance_transform(in);
+fn vs_plant(in: PlantIn, inst: TreeInstance) -> PlantOut {
+    return instance_transform(in, inst);
 }
 
 @fragment
@@ -111,8 +96,8 @@ struct ShadowOut {
 };
 
 @vertex
-fn vs_plant_shadow(in: PlantIn) -> ShadowOut {
-    let t = instance_transform(in);
+fn vs_plant_shadow(in: PlantIn, inst: TreeInstance) -> ShadowOut {
+    let t = instance_transform(in, inst);
     var out: ShadowOut;
     out.pos = t.pos;
     out.uv = t.uv;

@@ -259,11 +259,7 @@ impl MeshPipelines {
             ],
         });
         let sampler = crate::technique::common::trilinear_sampler(gpu, "leaf_sampler");
-        let module = sylvan_gpu::shader(
-            gpu,
-            "geometry",
-            &pipeline::with_frame(include_str!("geometry.wgsl")),
-        );
+        let module = sylvan_gpu::shader(gpu, "geometry", &shader_source());
         let buffers = [Some(GpuPlantVertex::LAYOUT), Some(GpuTreeInstance::LAYOUT)];
         let make = |label, pass, vs, fs, cull, layout: &wgpu::BindGroupLayout| {
             pipeline::build(
@@ -359,12 +355,7 @@ pub const ENTRY: Entry = Entry {
         })
     },
     bake: None,
-    shaders: || {
-        vec![(
-            "geometry",
-            pipeline::with_frame(include_str!("geometry.wgsl")),
-        )]
-    },
+    shaders: || vec![("geometry", shader_source())],
 };
 
 impl Technique for Geometry {
@@ -422,4 +413,13 @@ impl Geometry {
         }
         counts
     }
+}
+
+/// The WGSL of `geometry` as compiled: the frame's group 0, `bindings.wgsl` (group 1), then
+/// `geometry.wgsl`.
+pub(crate) fn shader_source() -> String {
+    crate::pipeline::with_frame(concat!(
+        include_str!("bindings.wgsl"),
+        include_str!("geometry.wgsl")
+    ))
 }

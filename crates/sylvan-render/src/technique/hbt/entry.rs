@@ -31,7 +31,7 @@ pub const ENTRY: Entry = Entry {
         })
     },
     bake: Some(bake_summary),
-    shaders: || vec![("hbt", crate::pipeline::with_frame(include_str!("hbt.wgsl")))],
+    shaders: || vec![("hbt", super::shader_source())],
 };
 
 fn bake_summary(job: BakeJob<'_>) -> Result<BakeSummary, RenderError> {

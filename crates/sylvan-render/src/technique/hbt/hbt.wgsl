@@ -3,41 +3,7 @@
 // sun directions, summed with their weights in one fragment, plus the 3 ambient images; lit by
 // the sun times the visibility cube-maps' transmittance (interpolated from the box's 8
 // corners) and the sky times their sky term; composited premultiplied over the background.
-
-struct HbtSet {
-    // xyz: plant bounding box minimum (model space); w: bounding-sphere radius.
-    min: vec4<f32>,
-    // xyz: maximum.
-    max: vec4<f32>,
-    // x: first direct tile; y: light samples; z: first ambient tile; w: first sample frame.
-    info: vec4<u32>,
-    // x: view samples.
-    counts: vec4<u32>,
-};
-
-// The orthographic frame a view sample was baked in (see `bake::view_frame`).
-struct SampleFrame {
-    // xyz: image right axis; w: half extent along it.
-    u: vec4<f32>,
-    // xyz: image up axis; w: half extent.
-    v: vec4<f32>,
-    // xyz: towards the eye; w: half depth.
-    f: vec4<f32>,
-};
-
-struct HbtAtlas {
-    // x: tile texels; y: tiles per row; z: tiles per layer; w: 1 for cross projection.
-    tiles: vec4<u32>,
-    // x: 1 / tiles per row; y: 1 / rows of tiles; z: 1 when received shadows come from the
-    // cascades instead of the cube-maps; w: unused.
-    params: vec4<f32>,
-};
-
-@group(1) @binding(0) var<storage, read> species_info: array<HbtSet>;
-@group(1) @binding(1) var<storage, read> frames: array<SampleFrame>;
-@group(1) @binding(2) var atlas_color: texture_2d_array<f32>;
-@group(1) @binding(3) var atlas_sampler: sampler;
-@group(1) @binding(4) var<uniform> atlas: HbtAtlas;
+// Bind group 1: `bindings.wgsl`.
 
 struct HbtIn {
     @builtin(vertex_index) vertex: u32,
@@ -210,11 +176,6 @@ fn fetch(tile: u32, uv: vec2<f32>, lod: f32) -> vec4<f32> {
     let half = 0.5 * exp2(ceil(lod)) / f32(atlas.tiles.x);
     let a = (cell + clamp(uv, vec2<f32>(half), vec2<f32>(1.0 - half))) * atlas.params.xy;
     return textureSampleLevel(atlas_color, atlas_sampler, a, i32(tile / atlas.tiles.z), lod);
-}
-
-// Opacity of coverage `cover` drawn with share `w` of its optical depth.
-fn presence_alpha(cover: f32, w: f32) -> f32 {
-    return 1.0 - pow(1.0 - min(cover, 0.995), w);
 }
 
 fn inside(uv: vec2<f32>) -> bool {

@@ -545,3 +545,11 @@ impl ParamTable for HbtDrawParams {
         Ok(())
     }
 }
+
+/// The WGSL of `hbt` as compiled: the frame's group 0, `bindings.wgsl` (group 1), then `hbt.wgsl`.
+pub(crate) fn shader_source() -> String {
+    crate::pipeline::with_frame(concat!(
+        include_str!("bindings.wgsl"),
+        include_str!("hbt.wgsl")
+    ))
+}

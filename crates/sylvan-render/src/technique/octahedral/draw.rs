@@ -6,7 +6,6 @@ use super::{OctahedralBakeParams, OctahedralDrawParams, SHADOW_OFFSET};
 use crate::RenderError;
 use crate::bake::image::TileLevel;
 use crate::frame::{CASCADES, FrameResources};
-use crate::pipeline;
 use crate::technique::common::{self, Growable, TileAtlas};
 use crate::technique::geometry::LEAF_TRANSLUCENCY;
 use crate::technique::{DrawContext, DrawCounts, FrameInput, Technique};
@@ -211,11 +210,7 @@ impl Octahedral {
                 atlas_buffer.as_entire_binding(),
             ],
         );
-        let module = sylvan_gpu::shader(
-            gpu,
-            "octahedral",
-            &pipeline::with_frame(include_str!("octahedral.wgsl")),
-        );
+        let module = sylvan_gpu::shader(gpu, "octahedral", &super::shader_source());
         let (pipeline, shadow_pipeline) = common::image_pipelines(
             gpu,
             frame,

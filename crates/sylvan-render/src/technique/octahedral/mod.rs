@@ -252,10 +252,14 @@ pub const ENTRY: Entry = Entry {
             fields,
         })
     }),
-    shaders: || {
-        vec![(
-            "octahedral",
-            crate::pipeline::with_frame(include_str!("octahedral.wgsl")),
-        )]
-    },
+    shaders: || vec![("octahedral", shader_source())],
 };
+
+/// The WGSL of `octahedral` as compiled: the frame's group 0, `bindings.wgsl` (group 1), then
+/// `octahedral.wgsl`.
+pub(crate) fn shader_source() -> String {
+    crate::pipeline::with_frame(concat!(
+        include_str!("bindings.wgsl"),
+        include_str!("octahedral.wgsl")
+    ))
+}

@@ -2,45 +2,11 @@
 // the hemi-octahedral grid nearest the view direction, each sampled where it saw the pixel's
 // ray (plane intersection + depth parallax), blended premultiplied and lit per pixel with the
 // reference model (albedo, normal and depth are baked; light is not).
-
-struct OctSpecies {
-    // xyz: model-space centre of the frames; w: their half side (the bounding sphere radius).
-    centre_radius: vec4<f32>,
-    bbox_min: vec4<f32>,
-    bbox_max: vec4<f32>,
-    // x: first tile in the atlas.
-    info: vec4<u32>,
-};
-
-// One grid view's image axes (model space); the view looks along -f.
-struct OctView {
-    u: vec4<f32>,
-    v: vec4<f32>,
-    f: vec4<f32>,
-};
-
-struct OctAtlas {
-    // x: tile texels; y: tiles per row; z: tiles per layer; w: views per grid side.
-    tiles: vec4<u32>,
-    // x: leaf translucency; y: 1 / tiles per row; z: 1 / rows of tiles per layer.
-    params: vec4<f32>,
-    // x: parallax steps; y: views blended (1 or 3); z: shadow depth offset (fraction of radius).
-    draw: vec4<f32>,
-};
-
-@group(1) @binding(0) var<storage, read> oct_species: array<OctSpecies>;
-@group(1) @binding(1) var<storage, read> oct_views: array<OctView>;
-@group(1) @binding(2) var atlas_color: texture_2d_array<f32>;
-@group(1) @binding(3) var atlas_normal: texture_2d_array<f32>;
-@group(1) @binding(4) var atlas_sampler: sampler;
-@group(1) @binding(5) var<uniform> atlas: OctAtlas;
+// Bind group 1: `bindings.wgsl`.
 
 struct OctIn {
     @builtin(vertex_index) vertex: u32,
-    // Instance: xyz trunk base, w uniform scale.
-    @location(4) base_scale: vec4<f32>,
-    // Instance: x cos(rotation), y sin(rotation), z tint seed, w presence.
-    @location(5) rot: vec4<f32>,
+    // With the tree instance (`TreeInstance`, locations 4 and 5): its species.
     @location(6) species: u32,
 };
 
@@ -55,22 +21,6 @@ struct OctOut {
     @location(4) @interpolate(flat) rot: vec4<f32>,
     @location(5) @interpolate(flat) lod: f32,
 };
-
-fn oct_to_world_dir(d: vec3<f32>, rot: vec4<f32>) -> vec3<f32> {
-    return vec3<f32>(rot.x * d.x + rot.y * d.z, d.y, -rot.y * d.x + rot.x * d.z);
-}
-
-fn oct_to_model_dir(d: vec3<f32>, rot: vec4<f32>) -> vec3<f32> {
-    return vec3<f32>(rot.x * d.x - rot.y * d.z, d.y, rot.y * d.x + rot.x * d.z);
-}
-
-fn oct_to_world(p: vec3<f32>, base_scale: vec4<f32>, rot: vec4<f32>) -> vec3<f32> {
-    return oct_to_world_dir(p * base_scale.w, rot) + base_scale.xyz;
-}
-
-fn oct_to_model(p: vec3<f32>, base_scale: vec4<f32>, rot: vec4<f32>) -> vec3<f32> {
-    return oct_to_model_dir(p - base_scale.xyz, rot) / base_scale.w;
-}
 
 // Mirrors `bake::hemi_oct_encode`: direction (y ≥ 0) → [-1, 1]².
 fn hemi_oct_encode(d: vec3<f32>) -> vec2<f32> {
@@ -117,10 +67,10 @@ fn hidden() -> OctOut {
 
 // The quad of one tree facing `toward` (the eye, or the sun when `is_dir`), the views seen
 // from there and the mip level.
-fn oct_vertex(in: OctIn, toward_world: vec3<f32>, is_dir: bool) -> OctOut {
+fn oct_vertex(in: OctIn, inst: TreeInstance, toward_world: vec3<f32>, is_dir: bool) -> OctOut {
     let sp = oct_species[in.species];
-    let centre = oct_to_world(sp.centre_radius.xyz, in.base_scale, in.rot);
-    let radius = sp.centre_radius.w * in.base_scale.w;
+    let centre = instance_to_world(sp.centre_radius.xyz, inst.base_scale, inst.rot);
+    let radius = sp.centre_radius.w * inst.base_scale.w;
     var a = toward_world;
     var grow = 1.0;
     var dist = 0.0;
@@ -135,7 +85,7 @@ fn oct_vertex(in: OctIn, toward_world: vec3<f32>, is_dir: bool) -> OctOut {
         }
     }
     // The view direction in the tree's frame, folded onto the upper hemisphere.
-    var d = oct_to_model_dir(a, in.rot);
+    var d = instance_dir_to_model(a, inst.rot);
     d.y = max(d.y, 0.0);
     d = select(vec3<f32>(0.0, 1.0, 0.0), normalize(d), dot(d, d) > 1e-12);
     let pick = pick_views(d, is_dir || atlas.draw.y < 2.0);
@@ -151,8 +101,8 @@ fn oct_vertex(in: OctIn, toward_world: vec3<f32>, is_dir: bool) -> OctOut {
     out.world = world;
     out.views = vec4<u32>(pick.views, in.species);
     out.weights = pick.weights;
-    out.base_scale = in.base_scale;
-    out.rot = in.rot;
+    out.base_scale = inst.base_scale;
+    out.rot = inst.rot;
     // A texel is 2·radius/tile metres; a pixel covers dist / pixels_per_metre (camera) or one
     // shadow-map texel (sun).
     let texel_m = 2.0 * radius / f32(atlas.tiles.x);
@@ -227,21 +177,16 @@ fn view_sample(sp: OctSpecies, k: u32, p: vec3<f32>, r: vec3<f32>, lod: f32) -> 
     return out;
 }
 
-// Opacity of blended coverage `alpha` at presence `presence` (presence scales optical depth).
-fn presence_alpha(alpha: f32, presence: f32) -> f32 {
-    return 1.0 - pow(1.0 - min(alpha, 0.995), presence);
-}
-
 @vertex
-fn vs_octahedral(in: OctIn) -> OctOut {
-    return oct_vertex(in, frame.camera.xyz, false);
+fn vs_octahedral(in: OctIn, inst: TreeInstance) -> OctOut {
+    return oct_vertex(in, inst, frame.camera.xyz, false);
 }
 
 @fragment
 fn fs_octahedral(in: OctOut) -> @location(0) vec4<f32> {
     let sp = oct_species[in.views.w];
-    let p = oct_to_model(in.world, in.base_scale, in.rot);
-    let r = normalize(oct_to_model_dir(in.world - frame.camera.xyz, in.rot));
+    let p = instance_to_model(in.world, in.base_scale, in.rot);
+    let r = normalize(instance_dir_to_model(in.world - frame.camera.xyz, in.rot));
     var color = vec4<f32>(0.0);
     var normal = vec3<f32>(0.0);
     var point = vec3<f32>(0.0);
@@ -264,8 +209,8 @@ fn fs_octahedral(in: OctOut) -> @location(0) vec4<f32> {
         discard;
     }
     let model = point / alpha;
-    let n = normalize(oct_to_world_dir(select(vec3<f32>(0.0, 1.0, 0.0), normalize(normal), dot(normal, normal) > 1e-12), in.rot));
-    let world = oct_to_world(model, in.base_scale, in.rot);
+    let n = normalize(instance_dir_to_world(select(vec3<f32>(0.0, 1.0, 0.0), normalize(normal), dot(normal, normal) > 1e-12), in.rot));
+    let world = instance_to_world(model, in.base_scale, in.rot);
     let tint = 0.85 + 0.3 * in.rot.z;
     let albedo = color.rgb * vec3<f32>(tint, mix(tint, 1.0, 0.5), 1.0);
     let l = frame.sun_dir.xyz;
@@ -284,21 +229,21 @@ fn fs_octahedral(in: OctOut) -> @location(0) vec4<f32> {
 // texel occludes with probability equal to its coverage (3×3 PCF softens it) at the depth of
 // the parallaxed surface, pushed a little away from the sun.
 @vertex
-fn vs_octahedral_shadow(in: OctIn) -> OctOut {
-    return oct_vertex(in, frame.sun_dir.xyz, true);
+fn vs_octahedral_shadow(in: OctIn, inst: TreeInstance) -> OctOut {
+    return oct_vertex(in, inst, frame.sun_dir.xyz, true);
 }
 
 @fragment
 fn fs_octahedral_shadow(in: OctOut) -> @builtin(frag_depth) f32 {
     let sp = oct_species[in.views.w];
-    let p = oct_to_model(in.world, in.base_scale, in.rot);
-    let r = -oct_to_model_dir(frame.sun_dir.xyz, in.rot);
+    let p = instance_to_model(in.world, in.base_scale, in.rot);
+    let r = -instance_dir_to_model(frame.sun_dir.xyz, in.rot);
     let s = view_sample(sp, in.views.x, p, r, in.lod);
     if (presence_alpha(s.color.a, in.rot.w) <= hash13(vec3<f32>(in.pos.xy, 3.0 + 97.0 * in.rot.z))) {
         discard;
     }
     let offset = atlas.draw.z * sp.centre_radius.w * in.base_scale.w;
-    let world = oct_to_world(s.point, in.base_scale, in.rot) - frame.sun_dir.xyz * offset;
+    let world = instance_to_world(s.point, in.base_scale, in.rot) - frame.sun_dir.xyz * offset;
     let clip = frame.view_proj * vec4<f32>(world, 1.0);
     return clamp(clip.z / clip.w, 0.0, 1.0);
 }

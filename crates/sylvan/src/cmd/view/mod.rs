@@ -174,15 +174,4 @@ fn check_output(p: &Path, ext: &str, flag: &str) -> Result<()> {
     Ok(())
 }
 
-/// An error and its causes on one line (as `main` prints them).
-pub fn one_line(e: &anyhow::Error) -> String {
-    let mut out = e.to_string();
-    for cause in e.chain().skip(1) {
-        let c = cause.to_string();
-        if !out.contains(&c) {
-            out.push_str(": ");
-            out.push_str(&c);
-        }
-    }
-    out.replace('\n', " ")
-}
+pub use super::common::one_line;

@@ -7,7 +7,6 @@ use super::super::{HbtDrawParams, HbtProjection, HbtShadows};
 use crate::RenderError;
 use crate::directions::DirectionSet;
 use crate::frame::FrameResources;
-use crate::pipeline;
 use crate::technique::common::{self, TileAtlas};
 use crate::technique::hbt::bake as hb;
 use bytemuck::{Pod, Zeroable};
@@ -159,11 +158,7 @@ impl BillboardGpu {
                 atlas_buffer.as_entire_binding(),
             ],
         );
-        let module = sylvan_gpu::shader(
-            gpu,
-            "hbt",
-            &pipeline::with_frame(include_str!("../hbt.wgsl")),
-        );
+        let module = sylvan_gpu::shader(gpu, "hbt", &super::super::shader_source());
         let (main, shadow) = common::image_pipelines(
             gpu,
             frame,

@@ -5,6 +5,7 @@
 //! `pixels · (1 ± band)` ([`HbtDrawParams::band`]). [`Hbt::update`](super::Hbt::update) calls
 //! [`select`] per tree and pass and draws what it returns.
 
+use crate::technique::common::smoothstep;
 use crate::technique::hbt::HbtDrawParams;
 
 /// One switch between two levels by projected texel size: the level below opens when a texel
@@ -32,14 +33,6 @@ impl Switch {
     pub fn share(&self, texel_px: f32) -> f32 {
         smoothstep(self.lo, self.hi, texel_px)
     }
-}
-
-fn smoothstep(e0: f32, e1: f32, x: f32) -> f32 {
-    if e1 <= e0 {
-        return if x >= e0 { 1.0 } else { 0.0 };
-    }
-    let t = ((x - e0) / (e1 - e0)).clamp(0.0, 1.0);
-    t * t * (3.0 - 2.0 * t)
 }
 
 /// Pixels one texel of side `texel` (model metres per unit scale) covers on a tree of scale

@@ -1,0 +1,12 @@
+// `geometry`'s bind group 1, declared once: the Rust layout in this folder uses the same
+// binding indices. Prepended to `geometry.wgsl` (after the frame's group 0).
+
+struct Species {
+    bbox_min: vec4<f32>,
+    // xyz: bbox max; w: leaf translucency.
+    bbox_max: vec4<f32>,
+};
+
+@group(1) @binding(0) var leaf_texture: texture_2d<f32>;
+@group(1) @binding(1) var leaf_sampler: sampler;
+@group(1) @binding(2) var<uniform> species: Species;
