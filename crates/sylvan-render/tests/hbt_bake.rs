@@ -7,7 +7,9 @@ mod common;
 use common::gpu;
 use common::hbt::{HbtParams, isotropic_tree, params};
 use glam::Vec3;
+use sylvan_render::bake::Bake;
 use sylvan_render::bake::CachePolicy;
+use sylvan_render::bake::codec::Codec;
 use sylvan_render::directions::DirectionSet;
 use sylvan_render::technique::hbt::{self, HbtBake, HbtBaked};
 use sylvan_scene::{Camera, TreeInstance};
@@ -43,7 +45,7 @@ fn baked_btf_is_lit_and_self_shadowed() {
     let plant = isotropic_tree();
     let p = params();
     let start = std::time::Instant::now();
-    let b = hbt::bake::bake(&gpu, &plant, &p.bake(), |_, _| {}).expect("bake");
+    let b = HbtBake::bake(&gpu, &plant, &p.bake(), &mut |_, _| {}).expect("bake");
     eprintln!(
         "test tree: {} + {} images of {}², {} bytes, baked in {:.0} ms",
         b.direct.len(),
@@ -168,7 +170,7 @@ fn the_level_below_gets_its_own_btfs_placements_and_cube_maps() {
         ..Default::default()
     };
     let start = std::time::Instant::now();
-    let b = hbt::bake::bake(&gpu, &plant, &p.bake(), |_, _| {}).expect("bake");
+    let b = HbtBake::bake(&gpu, &plant, &p.bake(), &mut |_, _| {}).expect("bake");
     let (tree_bytes, branch_bytes) = b.image_bytes();
     eprintln!(
         "pine, 2 levels (6 × 6 directions, 16²): {} objects for {} placements ({} distinct main branches), {tree_bytes} + {branch_bytes} image bytes, {} cube-map bytes, {:.0} ms",

@@ -7,7 +7,10 @@ mod common;
 use common::gpu;
 use common::hbt::{HbtParams, one_tree_scene, params};
 use glam::Vec3;
+use sylvan_render::bake::Bake;
 use sylvan_render::bake::CachePolicy;
+use sylvan_render::bake::codec::Codec;
+use sylvan_render::technique::hbt::HbtBake;
 use sylvan_render::technique::hbt::{self, HbtBaked};
 
 /// Renders one `plant` (16 m tall) at the distance where `texel` (plant units) covers `pixels`
@@ -95,7 +98,7 @@ fn levels_differ_less_at_the_switch_than_either_differs_from_the_reference() {
         band: 0.0,
         ..Default::default()
     };
-    let baked = hbt::bake::bake(&gpu, &plant, &p.bake(), |_, _| {}).expect("bake");
+    let baked = HbtBake::bake(&gpu, &plant, &p.bake(), &mut |_, _| {}).expect("bake");
     // The bound: switching levels changes the picture less than either level already differs
     // from the reference, so the switch adds no error of its own beyond what each level has.
     // Tree → main branches (meshes kept out: levels 2).
@@ -177,7 +180,7 @@ fn main_branches_open_into_their_small_branches() {
         ..params()
     };
     let start = std::time::Instant::now();
-    let b = hbt::bake::bake(&gpu, &plant, &p.bake(), |_, _| {}).expect("bake");
+    let b = HbtBake::bake(&gpu, &plant, &p.bake(), &mut |_, _| {}).expect("bake");
     let s = &b.small;
     eprintln!(
         "fir, 3 BTF levels: {} main objects / {} placements, {} small objects / {} placements, {:.0} ms",
@@ -256,7 +259,7 @@ fn main_branches_open_into_their_small_branches() {
 
     // MNP01 §6.1 one level down: main branches rendered from their small branches cover what
     // the geometry bake of the same branches covers (view by view, mean coverage).
-    let composed = hbt::bake::bake(
+    let composed = HbtBake::bake(
         &gpu,
         &plant,
         &HbtParams {
@@ -264,7 +267,7 @@ fn main_branches_open_into_their_small_branches() {
             ..p.clone()
         }
         .bake(),
-        |_, _| {},
+        &mut |_, _| {},
     )
     .expect("composed bake");
     let cover = |img: &[Vec<u8>]| img[0].chunks(4).map(|t| t[3] as f32).sum::<f32>();
@@ -411,7 +414,7 @@ fn meshes_branch_by_branch(gpu: &sylvan_gpu::Gpu, plant: &sylvan_plant::Plant) {
         open_texel_pixels: 0.1,
         ..Default::default()
     };
-    let baked = hbt::bake::bake(gpu, plant, &p.bake(), |_, _| {}).expect("bake");
+    let baked = HbtBake::bake(gpu, plant, &p.bake(), &mut |_, _| {}).expect("bake");
     let (size, fov) = (160u32, 40.0f32);
     let ppm = size as f32 / (2.0 * (fov.to_radians() / 2.0).tan());
     let height = 16.0;

@@ -9,6 +9,7 @@ use glam::Vec3;
 use sylvan_render::RenderOptions;
 use sylvan_render::bake::Bake;
 use sylvan_render::bake::CachePolicy;
+use sylvan_render::bake::codec::Codec;
 use sylvan_render::technique::octahedral::{OctahedralBake, OctahedralBakeParams, OctahedralBaked};
 use sylvan_scene::{Camera, Scene, Sun, TreeInstance};
 
@@ -28,12 +29,12 @@ fn payload_round_trips_and_damage_is_rejected() {
     let baked = small_bake();
     assert_eq!(baked.tiles.len(), 16);
     assert!(baked.tiles.iter().all(|t| t.len() == 6), "mips 32..1");
-    let bytes = OctahedralBake::encode(&baked);
-    assert_eq!(OctahedralBake::decode(&bytes).unwrap(), baked);
+    let bytes = baked.encode();
+    assert_eq!(OctahedralBaked::decode(&bytes).unwrap(), baked);
     // Every truncation is an error, never a panic or a short asset.
     for cut in (0..bytes.len()).step_by(97).chain([bytes.len() - 1]) {
         assert!(
-            OctahedralBake::decode(&bytes[..cut]).is_err(),
+            OctahedralBaked::decode(&bytes[..cut]).is_err(),
             "cut at {cut}"
         );
     }
@@ -41,19 +42,19 @@ fn payload_round_trips_and_damage_is_rejected() {
     // size that is not a power of two, and a huge length are errors.
     let mut long = bytes.clone();
     long.push(0);
-    assert!(OctahedralBake::decode(&long).is_err());
+    assert!(OctahedralBaked::decode(&long).is_err());
     for (offset, value) in [(0usize, 40u32), (0, 5), (4, 24)] {
         let mut bad = bytes.clone();
         bad[offset..offset + 4].copy_from_slice(&value.to_le_bytes());
         assert!(
-            OctahedralBake::decode(&bad).is_err(),
+            OctahedralBaked::decode(&bad).is_err(),
             "field at {offset} = {value}"
         );
     }
     let mut huge = bytes.clone();
     // The tile count (u64) follows grid, tile, centre (8 + 12 bytes) and radius.
     huge[8 + 8 + 12 + 4..8 + 8 + 12 + 4 + 8].copy_from_slice(&(1u64 << 60).to_le_bytes());
-    assert!(OctahedralBake::decode(&huge).is_err());
+    assert!(OctahedralBaked::decode(&huge).is_err());
     // The views see the tree (the test tree's cards are all edge-on from exactly ±X at the
     // horizon, and its trunk is under a texel wide: those views may be empty).
     let seen = baked

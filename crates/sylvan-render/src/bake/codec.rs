@@ -144,6 +144,15 @@ impl<'a> Decoder<'a> {
     }
 }
 
+/// A baked asset's payload: written by [`Codec::encode`], read back by [`Codec::decode`] with
+/// every length, count and range checked (a payload that decodes is safe to draw).
+pub trait Codec: Sized {
+    /// Serialises the asset.
+    fn encode(&self) -> Vec<u8>;
+    /// Reads an asset back.
+    fn decode(bytes: &[u8]) -> Result<Self, DecodeError>;
+}
+
 /// FNV-1a, 64 bit: a stable content hash (same value on every platform and Rust version),
 /// used for cache keys and payload checksums. Not cryptographic.
 #[derive(Debug, Clone, Copy)]

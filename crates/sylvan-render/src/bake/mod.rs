@@ -359,7 +359,8 @@ pub struct BakeReport {
     pub bytes: u64,
 }
 
-/// The offline half of a technique: one plant → one asset, a pure function of the plant and
+/// The offline half of a technique: one plant → one asset (its payload through
+/// [`codec::Codec`]), a pure function of the plant and
 /// the bake parameters, cached on disk by [`load_or_bake`]. The cache key is the hash of the
 /// parameters' canonical serialisation (every field, none picked by hand), the plant's whole
 /// content ([`plant_hash`]) and the format versions.
@@ -370,8 +371,8 @@ pub trait Bake {
     const FORMAT_VERSION: u32;
     /// Everything the bake depends on besides the plant.
     type Params: crate::technique::params::ParamTable;
-    /// One plant's baked asset.
-    type Asset: Clone;
+    /// One plant's baked asset, with its payload codec.
+    type Asset: Clone + codec::Codec;
     /// Bakes one plant; `progress(done, total)` reports work units as they complete.
     fn bake(
         gpu: &Gpu,
@@ -379,10 +380,23 @@ pub trait Bake {
         params: &Self::Params,
         progress: &mut dyn FnMut(usize, usize),
     ) -> Result<Self::Asset, RenderError>;
-    /// Serialises an asset.
-    fn encode(asset: &Self::Asset) -> Vec<u8>;
-    /// Reads an asset back (every length and range checked).
-    fn decode(bytes: &[u8]) -> Result<Self::Asset, codec::DecodeError>;
+    /// What `sylvan bake` reports about an asset.
+    fn describe(asset: &Self::Asset) -> AssetSummary;
+}
+
+/// A baked asset described for `sylvan bake`'s line and JSON.
+#[derive(Debug, Clone, Default)]
+pub struct AssetSummary {
+    /// The technique's part of the human-readable line ("24 boxes, 144 images of 64²").
+    pub line: String,
+    /// GPU texture bytes of its images (all mips).
+    pub image_bytes: u64,
+    /// Images baked.
+    pub images: usize,
+    /// Texels per image side.
+    pub tile: u32,
+    /// The technique's own figures (merged into the JSON object).
+    pub fields: serde_json::Map<String, serde_json::Value>,
 }
 
 /// The cache key of `B`'s asset for `plant`: name, versions, the canonical JSON of `params`
@@ -477,7 +491,7 @@ pub fn load_or_bake<B: Bake>(
     let mut stale = None;
     if let Some(p) = &path {
         match cache::read(p, &key) {
-            cache::Lookup::Hit(payload) => match B::decode(&payload) {
+            cache::Lookup::Hit(payload) => match <B::Asset as codec::Codec>::decode(&payload) {
                 Ok(baked) => {
                     return Ok((
                         baked,
@@ -498,7 +512,7 @@ pub fn load_or_bake<B: Bake>(
         }
     }
     let baked = B::bake(gpu, plant, params, progress)?;
-    let payload = B::encode(&baked);
+    let payload = codec::Codec::encode(&baked);
     if let Some(p) = &path {
         cache::write(p, &key, &payload).map_err(|e| {
             RenderError::Option(format!(

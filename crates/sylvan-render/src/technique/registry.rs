@@ -4,9 +4,10 @@
 //! plus one line here.
 
 use super::params::ParamSpec;
+use super::params::ParamTable;
 use super::{BuildContext, Built};
 use crate::RenderError;
-use crate::bake::{BakeReport, CachePolicy};
+use crate::bake::{AssetSummary, Bake, BakeReport, CachePolicy};
 use sylvan_gpu::Gpu;
 use sylvan_plant::Plant;
 use sylvan_scene::Setting;
@@ -40,16 +41,20 @@ pub struct BakeJob<'a> {
 pub struct BakeSummary {
     /// How the asset was obtained.
     pub report: BakeReport,
-    /// GPU texture bytes of its images (all mips).
-    pub image_bytes: u64,
-    /// Images baked.
-    pub images: usize,
-    /// Texels per image side.
-    pub tile: u32,
-    /// The technique's own figures (merged into the JSON object).
-    pub fields: serde_json::Map<String, serde_json::Value>,
-    /// The technique's part of the human-readable line.
-    pub line: String,
+    /// The asset, described by its technique ([`crate::bake::Bake::describe`]).
+    pub asset: AssetSummary,
+}
+
+/// The `bake` of a registry entry for a technique baking with `B` and drawing with `D`
+/// parameters: the `--set` settings resolved, the asset baked or read, and described.
+pub fn bake_with<B: Bake, D: ParamTable>(job: BakeJob<'_>) -> Result<BakeSummary, RenderError> {
+    let (params, _) = super::params::resolve::<B::Params, D>(B::NAME, job.settings)?;
+    let (asset, report) =
+        crate::bake::load_or_bake::<B>(job.gpu, job.plant, &params, job.policy, job.progress)?;
+    Ok(BakeSummary {
+        report,
+        asset: B::describe(&asset),
+    })
 }
 
 /// One technique.

@@ -84,23 +84,23 @@ pub fn run(args: BakeCmdArgs) -> anyhow::Result<()> {
             "bake_ms": r.ms,
             "file": file,
             "file_bytes": r.path.as_ref().and_then(|p| std::fs::metadata(p).ok()).map_or(0, |m| m.len()),
-            "image_bytes": summary.image_bytes,
-            "images": summary.images,
-            "tile": summary.tile,
+            "image_bytes": summary.asset.image_bytes,
+            "images": summary.asset.images,
+            "tile": summary.asset.tile,
         });
         if let Some(obj) = json.as_object_mut() {
             if let Some(why) = &r.stale {
                 obj.insert("rebaked_because".into(), why.clone().into());
             }
-            obj.extend(summary.fields.clone());
+            obj.extend(summary.asset.fields.clone());
         }
         println!("{json}");
     } else {
         println!(
             "{}: {}, {:.2} MB of images, {} in {:.0} ms{}",
             plant.name,
-            summary.line,
-            summary.image_bytes as f64 / 1e6,
+            summary.asset.line,
+            summary.asset.image_bytes as f64 / 1e6,
             if r.from_cache {
                 "read from cache"
             } else {

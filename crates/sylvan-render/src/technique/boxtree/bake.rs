@@ -75,109 +75,6 @@ impl BoxTreeBaked {
             .sum()
     }
 
-    /// The payload written to the cache.
-    pub fn encode(&self) -> Vec<u8> {
-        let mut e = Encoder::default();
-        e.u32(self.tile);
-        e.str(self.layout.name());
-        e.u32(self.bake_wood as u32);
-        e.u64(self.boxes.len() as u64);
-        for b in &self.boxes {
-            e.u32(b.node);
-            e.u32(b.parent);
-            e.u32s(&b.children);
-            e.f32s(&b.min);
-            e.f32s(&b.max);
-            e.u32s(&[
-                b.residual_leaves.start,
-                b.residual_leaves.end,
-                b.residual_wood.start,
-                b.residual_wood.end,
-                b.leaves,
-            ]);
-            e.f32(b.metres_per_texel);
-        }
-        e.u32s(&self.leaf_indices);
-        e.u32s(&self.wood_indices);
-        e.u64(self.tiles.len() as u64);
-        for levels in &self.tiles {
-            TileLevel::encode_chain(&mut e, levels);
-        }
-        e.buf
-    }
-
-    /// Reads a payload back, checking every count and range against the rest.
-    pub fn decode(bytes: &[u8]) -> Result<Self, DecodeError> {
-        let bad = |m: String| DecodeError(m);
-        let mut d = Decoder::new(bytes);
-        let tile = d.u32()?;
-        let layout_name = d.str()?;
-        let layout = PlaneLayout::parse(&layout_name)
-            .ok_or_else(|| bad(format!("unknown plane layout '{layout_name}'")))?;
-        let bake_wood = d.u32()? != 0;
-        let nboxes = d.u64()?;
-        if nboxes == 0 || nboxes > super::MAX_BOXES as u64 {
-            return Err(bad(format!(
-                "{nboxes} boxes (1–{} allowed)",
-                super::MAX_BOXES
-            )));
-        }
-        let mut boxes = Vec::with_capacity(nboxes as usize);
-        for _ in 0..nboxes {
-            let node = d.u32()?;
-            let parent = d.u32()?;
-            let children = d.u32s()?;
-            let arr3 = |v: Vec<f32>| -> Result<[f32; 3], DecodeError> {
-                v.try_into()
-                    .map_err(|_| DecodeError("box corner is not 3 floats".into()))
-            };
-            let min = arr3(d.f32s()?)?;
-            let max = arr3(d.f32s()?)?;
-            let r = d.u32s()?;
-            if r.len() != 5 {
-                return Err(bad("box ranges are not 5 integers".into()));
-            }
-            let metres_per_texel = d.f32()?;
-            boxes.push(BakedBox {
-                node,
-                parent,
-                children,
-                min,
-                max,
-                residual_leaves: r[0]..r[1],
-                residual_wood: r[2]..r[3],
-                leaves: r[4],
-                metres_per_texel,
-            });
-        }
-        let leaf_indices = d.u32s()?;
-        let wood_indices = d.u32s()?;
-        let ntiles = d.u64()?;
-        if ntiles != nboxes * layout.images() as u64 {
-            return Err(bad(format!(
-                "{ntiles} images for {nboxes} boxes × {}",
-                layout.images()
-            )));
-        }
-        let mut tiles = Vec::with_capacity(ntiles as usize);
-        for _ in 0..ntiles {
-            let levels = TileLevel::decode_chain(&mut d, tile)?;
-            tiles.push(levels);
-        }
-        d.finish()?;
-        let baked = Self {
-            tile,
-            layout,
-            bake_wood,
-            boxes,
-            leaf_indices,
-            wood_indices,
-            tiles,
-        };
-        baked.validate().map_err(DecodeError)?;
-        Ok(baked)
-    }
-
     /// Structural checks: parents before children, ranges inside the index arrays.
     fn validate(&self) -> Result<(), String> {
         let n = self.boxes.len() as u32;
@@ -455,45 +352,152 @@ impl crate::bake::Bake for BoxTreeBake {
     type Params = BoxTreeBakeParams;
     type Asset = BoxTreeBaked;
 
+    fn describe(b: &BoxTreeBaked) -> crate::bake::AssetSummary {
+        let mut fields = serde_json::Map::new();
+        fields.insert("boxes".into(), b.boxes.len().into());
+        fields.insert("planes".into(), b.layout.name().into());
+        crate::bake::AssetSummary {
+            line: format!(
+                "{} boxes, {} images of {}² ({} planes)",
+                b.boxes.len(),
+                b.tiles.len(),
+                b.tile,
+                b.layout.name()
+            ),
+            image_bytes: b.image_bytes(),
+            images: b.tiles.len(),
+            tile: b.tile,
+            fields,
+        }
+    }
+
+    /// Bakes `plant`: layout, then every image on the GPU. `progress(done, total)` is called as
+    /// images complete.
     fn bake(
         gpu: &Gpu,
         plant: &Plant,
-        params: &BoxTreeBakeParams,
+        p: &BoxTreeBakeParams,
         progress: &mut dyn FnMut(usize, usize),
     ) -> Result<BoxTreeBaked, RenderError> {
-        bake(gpu, plant, params, progress)
-    }
-
-    fn encode(asset: &BoxTreeBaked) -> Vec<u8> {
-        asset.encode()
-    }
-
-    fn decode(bytes: &[u8]) -> Result<BoxTreeBaked, crate::bake::codec::DecodeError> {
-        BoxTreeBaked::decode(bytes)
+        let l = layout(plant, p);
+        let baker = PlantBaker::new(gpu, plant, p.tile, p.supersample)?;
+        let total = l.requests.len();
+        let images = baker.bake(gpu, &l.requests, |done| progress(done, total))?;
+        Ok(BoxTreeBaked {
+            tile: p.tile,
+            layout: p.layout,
+            bake_wood: p.bake_wood,
+            boxes: l.boxes,
+            leaf_indices: l.leaf_indices,
+            wood_indices: l.wood_indices,
+            tiles: images.iter().map(|t| t.levels()).collect(),
+        })
     }
 }
 
-/// Bakes `plant`: layout, then every image on the GPU. `progress(done, total)` is called as
-/// images complete.
-pub fn bake(
-    gpu: &Gpu,
-    plant: &Plant,
-    p: &BoxTreeBakeParams,
-    mut progress: impl FnMut(usize, usize),
-) -> Result<BoxTreeBaked, RenderError> {
-    let l = layout(plant, p);
-    let baker = PlantBaker::new(gpu, plant, p.tile, p.supersample)?;
-    let total = l.requests.len();
-    let images = baker.bake(gpu, &l.requests, |done| progress(done, total))?;
-    Ok(BoxTreeBaked {
-        tile: p.tile,
-        layout: p.layout,
-        bake_wood: p.bake_wood,
-        boxes: l.boxes,
-        leaf_indices: l.leaf_indices,
-        wood_indices: l.wood_indices,
-        tiles: images.iter().map(|t| t.levels()).collect(),
-    })
+impl crate::bake::codec::Codec for BoxTreeBaked {
+    /// The payload written to the cache.
+    fn encode(&self) -> Vec<u8> {
+        let mut e = Encoder::default();
+        e.u32(self.tile);
+        e.str(self.layout.name());
+        e.u32(self.bake_wood as u32);
+        e.u64(self.boxes.len() as u64);
+        for b in &self.boxes {
+            e.u32(b.node);
+            e.u32(b.parent);
+            e.u32s(&b.children);
+            e.f32s(&b.min);
+            e.f32s(&b.max);
+            e.u32s(&[
+                b.residual_leaves.start,
+                b.residual_leaves.end,
+                b.residual_wood.start,
+                b.residual_wood.end,
+                b.leaves,
+            ]);
+            e.f32(b.metres_per_texel);
+        }
+        e.u32s(&self.leaf_indices);
+        e.u32s(&self.wood_indices);
+        e.u64(self.tiles.len() as u64);
+        for levels in &self.tiles {
+            TileLevel::encode_chain(&mut e, levels);
+        }
+        e.buf
+    }
+
+    /// Reads a payload back, checking every count and range against the rest.
+    fn decode(bytes: &[u8]) -> Result<Self, DecodeError> {
+        let bad = |m: String| DecodeError(m);
+        let mut d = Decoder::new(bytes);
+        let tile = d.u32()?;
+        let layout_name = d.str()?;
+        let layout = PlaneLayout::parse(&layout_name)
+            .ok_or_else(|| bad(format!("unknown plane layout '{layout_name}'")))?;
+        let bake_wood = d.u32()? != 0;
+        let nboxes = d.u64()?;
+        if nboxes == 0 || nboxes > super::MAX_BOXES as u64 {
+            return Err(bad(format!(
+                "{nboxes} boxes (1–{} allowed)",
+                super::MAX_BOXES
+            )));
+        }
+        let mut boxes = Vec::with_capacity(nboxes as usize);
+        for _ in 0..nboxes {
+            let node = d.u32()?;
+            let parent = d.u32()?;
+            let children = d.u32s()?;
+            let arr3 = |v: Vec<f32>| -> Result<[f32; 3], DecodeError> {
+                v.try_into()
+                    .map_err(|_| DecodeError("box corner is not 3 floats".into()))
+            };
+            let min = arr3(d.f32s()?)?;
+            let max = arr3(d.f32s()?)?;
+            let r = d.u32s()?;
+            if r.len() != 5 {
+                return Err(bad("box ranges are not 5 integers".into()));
+            }
+            let metres_per_texel = d.f32()?;
+            boxes.push(BakedBox {
+                node,
+                parent,
+                children,
+                min,
+                max,
+                residual_leaves: r[0]..r[1],
+                residual_wood: r[2]..r[3],
+                leaves: r[4],
+                metres_per_texel,
+            });
+        }
+        let leaf_indices = d.u32s()?;
+        let wood_indices = d.u32s()?;
+        let ntiles = d.u64()?;
+        if ntiles != nboxes * layout.images() as u64 {
+            return Err(bad(format!(
+                "{ntiles} images for {nboxes} boxes × {}",
+                layout.images()
+            )));
+        }
+        let mut tiles = Vec::with_capacity(ntiles as usize);
+        for _ in 0..ntiles {
+            let levels = TileLevel::decode_chain(&mut d, tile)?;
+            tiles.push(levels);
+        }
+        d.finish()?;
+        let baked = Self {
+            tile,
+            layout,
+            bake_wood,
+            boxes,
+            leaf_indices,
+            wood_indices,
+            tiles,
+        };
+        baked.validate().map_err(DecodeError)?;
+        Ok(baked)
+    }
 }
 
 #[cfg(test)]

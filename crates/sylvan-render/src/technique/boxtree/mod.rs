@@ -52,7 +52,7 @@ pub use draw::BoxTree;
 
 use super::Built;
 use super::params::{self, ParamDoc, ParamTable};
-use super::registry::{BakeSummary, Entry, Kind};
+use super::registry::{self, Entry, Kind};
 
 /// Most boxes (and so images × 6) per plant.
 pub const MAX_BOXES: u32 = 256;
@@ -229,34 +229,7 @@ pub const ENTRY: Entry = Entry {
             reports,
         })
     },
-    bake: Some(|job| {
-        let (bake, _) =
-            params::resolve::<BoxTreeBakeParams, BoxTreeDrawParams>("boxtree", job.settings)?;
-        let (b, report) = crate::bake::load_or_bake::<BoxTreeBake>(
-            job.gpu,
-            job.plant,
-            &bake,
-            job.policy,
-            job.progress,
-        )?;
-        let mut fields = serde_json::Map::new();
-        fields.insert("boxes".into(), b.boxes.len().into());
-        fields.insert("planes".into(), b.layout.name().into());
-        Ok(BakeSummary {
-            line: format!(
-                "{} boxes, {} images of {}² ({} planes)",
-                b.boxes.len(),
-                b.tiles.len(),
-                b.tile,
-                b.layout.name()
-            ),
-            report,
-            image_bytes: b.image_bytes(),
-            images: b.tiles.len(),
-            tile: b.tile,
-            fields,
-        })
-    }),
+    bake: Some(registry::bake_with::<BoxTreeBake, BoxTreeDrawParams>),
     shaders: || vec![("boxtree", shader_source())],
 };
 

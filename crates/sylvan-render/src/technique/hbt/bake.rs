@@ -29,7 +29,6 @@ pub use cubes::coverage;
 use super::HbtBakeParams;
 use super::visibility;
 use crate::RenderError;
-use crate::bake::codec::DecodeError;
 use crate::directions::{DirectionLut, DirectionSet};
 use btf::bake_btf;
 use cubes::branch_cubes;
@@ -46,174 +45,200 @@ impl crate::bake::Bake for HbtBake {
     type Params = HbtBakeParams;
     type Asset = HbtBaked;
 
+    fn describe(b: &HbtBaked) -> crate::bake::AssetSummary {
+        let (tree_bytes, branch_bytes) = b.image_bytes();
+        let cube_bytes = (b.cubes.len() + b.small.cubes.len()) as u64;
+        let images = b.direct.len()
+            + b.ambient.len()
+            + b.objects
+                .iter()
+                .chain(&b.small.objects)
+                .map(|o| o.direct.len() + o.ambient.len())
+                .sum::<usize>();
+        let mut fields = serde_json::Map::new();
+        let mut put = |k: &str, v: serde_json::Value| {
+            fields.insert(k.into(), v);
+        };
+        put("views", b.views().into());
+        put("lights", b.lights().into());
+        put("branch_objects", b.objects.len().into());
+        put("branch_placements", b.placements.len().into());
+        put("small_objects", b.small.objects.len().into());
+        put("small_placements", b.small.placements.len().into());
+        put("tree_bytes", tree_bytes.into());
+        put("branch_bytes", branch_bytes.into());
+        put("cube_bytes", cube_bytes.into());
+        crate::bake::AssetSummary {
+            line: format!(
+                "{} views × {} lights + {} ambient images of {}² for the tree ({:.1} MB), {} branch objects for {} placements ({:.1} MB, cube-maps {:.2} MB), {images} images in all",
+                b.views(),
+                b.lights(),
+                b.ambient.len(),
+                b.tile,
+                tree_bytes as f64 / 1e6,
+                b.objects.len(),
+                b.placements.len(),
+                branch_bytes as f64 / 1e6,
+                cube_bytes as f64 / 1e6,
+            ),
+            image_bytes: tree_bytes + branch_bytes + cube_bytes,
+            images,
+            tile: b.tile,
+            fields,
+        }
+    }
+
+    /// Bakes `plant`'s BTF (the top level) and, with `p.branches`, the level below
+    /// ([`branch_level`]): each object's BTF over the branch direction sets, and each placement's
+    /// visibility cube-maps. `progress(done, total)` counts rasterised views, light maps and lit
+    /// views.
     fn bake(
         gpu: &Gpu,
         plant: &Plant,
-        params: &HbtBakeParams,
+        p: &HbtBakeParams,
         progress: &mut dyn FnMut(usize, usize),
     ) -> Result<HbtBaked, RenderError> {
-        bake(gpu, plant, params, progress)
-    }
-
-    fn encode(asset: &HbtBaked) -> Vec<u8> {
-        asset.encode()
-    }
-
-    fn decode(bytes: &[u8]) -> Result<HbtBaked, DecodeError> {
-        HbtBaked::decode(bytes)
-    }
-}
-
-/// Bakes `plant`'s BTF (the top level) and, with `p.branches`, the level below
-/// ([`branch_level`]): each object's BTF over the branch direction sets, and each placement's
-/// visibility cube-maps. `progress(done, total)` counts rasterised views, light maps and lit
-/// views.
-pub fn bake(
-    gpu: &Gpu,
-    plant: &Plant,
-    p: &HbtBakeParams,
-    mut progress: impl FnMut(usize, usize),
-) -> Result<HbtBaked, RenderError> {
-    let option = |e: crate::directions::DirectionError| RenderError::Option(e.to_string());
-    let views = DirectionSet::new(p.view_level).map_err(option)?;
-    let lights = DirectionSet::new(p.light_level).map_err(option)?;
-    let bviews = DirectionSet::new(p.branch_view_level).map_err(option)?;
-    let blights = DirectionSet::new(p.branch_light_level).map_err(option)?;
-    let level = if p.branches {
-        branch_level(plant, p.max_branch_objects as usize)
-    } else {
-        BranchLevel {
-            objects: Vec::new(),
-            placements: Vec::new(),
-            ranges: Vec::new(),
-        }
-    };
-    let small = if p.branches && p.small_branches {
-        small_level(plant, &level, p.max_branch_objects as usize)
-    } else {
-        BranchLevel {
-            objects: Vec::new(),
-            placements: Vec::new(),
-            ranges: Vec::new(),
-        }
-    };
-    let top = 2 * views.len() + lights.len();
-    let per_object = 2 * bviews.len() + blights.len();
-    let total = top + per_object * (level.objects.len() + small.objects.len());
-    // MNP01 §6.1: with `tree_from_branches` the tree level is rendered from the level below
-    // once that is baked (below); otherwise from geometry, now.
-    let compose = p.branches && p.tree_from_branches && !level.placements.is_empty();
-    let (mut direct, mut ambient) = if compose {
-        (Vec::new(), Vec::new())
-    } else {
-        bake_btf(gpu, plant, p, &views, &lights, &mut |d| progress(d, total))?
-    };
-    let mut objects = Vec::with_capacity(level.objects.len() + small.objects.len());
-    for (k, (object, sub, uses)) in level.objects.iter().chain(&small.objects).enumerate() {
-        let done = top + per_object * k;
-        let (direct, ambient) = bake_btf(gpu, sub, p, &bviews, &blights, &mut |d| {
-            progress(done + d, total)
-        })?;
-        objects.push(ObjectBtf {
-            object: *object,
-            uses: *uses,
-            bbox_min: sub.bbox_min,
-            bbox_max: sub.bbox_max,
-            direct,
-            ambient,
-        });
-    }
-    let small_objects = objects.split_off(level.objects.len());
-    let placed = |level: &BranchLevel| -> Vec<Placement> {
-        level
-            .placements
-            .iter()
-            .map(|(o, m)| Placement {
-                object: *o,
-                transform: Affine3A::from_mat4(*m).to_cols_array(),
-            })
-            .collect()
-    };
-    let placements = placed(&level);
-    let small_placements = placed(&small);
-    let lut = DirectionLut::new(&bviews, DirectionLut::DEFAULT_RESOLUTION).map_err(option)?;
-    let res = p.cube_resolution as usize;
-    // MNP01 §3.3 one level down: each small branch sees the rest of its own main branch.
-    let mut small_cubes = Vec::new();
-    for r in &small.ranges {
-        let within = &small_placements[r[0] as usize..r[1] as usize];
-        small_cubes.extend(branch_cubes(&small_objects, within, &lut, p.tile, res));
-    }
-    // MNP01 §6.1 one level down: a main branch with small branches rendered from them.
-    if compose {
-        let per = visibility::CORNERS * visibility::FACES * res * res;
-        for (k, r) in small.ranges.iter().enumerate() {
-            let (a, b) = (r[0] as usize, r[1] as usize);
-            if a == b {
-                continue;
+        let option = |e: crate::directions::DirectionError| RenderError::Option(e.to_string());
+        let views = DirectionSet::new(p.view_level).map_err(option)?;
+        let lights = DirectionSet::new(p.light_level).map_err(option)?;
+        let bviews = DirectionSet::new(p.branch_view_level).map_err(option)?;
+        let blights = DirectionSet::new(p.branch_light_level).map_err(option)?;
+        let level = if p.branches {
+            branch_level(plant, p.max_branch_objects as usize)
+        } else {
+            BranchLevel {
+                objects: Vec::new(),
+                placements: Vec::new(),
+                ranges: Vec::new(),
             }
-            let o = &objects[k];
-            let (direct, ambient) = super::compose::from_level_below(
+        };
+        let small = if p.branches && p.small_branches {
+            small_level(plant, &level, p.max_branch_objects as usize)
+        } else {
+            BranchLevel {
+                objects: Vec::new(),
+                placements: Vec::new(),
+                ranges: Vec::new(),
+            }
+        };
+        let top = 2 * views.len() + lights.len();
+        let per_object = 2 * bviews.len() + blights.len();
+        let total = top + per_object * (level.objects.len() + small.objects.len());
+        // MNP01 §6.1: with `tree_from_branches` the tree level is rendered from the level below
+        // once that is baked (below); otherwise from geometry, now.
+        let compose = p.branches && p.tree_from_branches && !level.placements.is_empty();
+        let (mut direct, mut ambient) = if compose {
+            (Vec::new(), Vec::new())
+        } else {
+            bake_btf(gpu, plant, p, &views, &lights, &mut |d| progress(d, total))?
+        };
+        let mut objects = Vec::with_capacity(level.objects.len() + small.objects.len());
+        for (k, (object, sub, uses)) in level.objects.iter().chain(&small.objects).enumerate() {
+            let done = top + per_object * k;
+            let (direct, ambient) = bake_btf(gpu, sub, p, &bviews, &blights, &mut |d| {
+                progress(done + d, total)
+            })?;
+            objects.push(ObjectBtf {
+                object: *object,
+                uses: *uses,
+                bbox_min: sub.bbox_min,
+                bbox_max: sub.bbox_max,
+                direct,
+                ambient,
+            });
+        }
+        let small_objects = objects.split_off(level.objects.len());
+        let placed = |level: &BranchLevel| -> Vec<Placement> {
+            level
+                .placements
+                .iter()
+                .map(|(o, m)| Placement {
+                    object: *o,
+                    transform: Affine3A::from_mat4(*m).to_cols_array(),
+                })
+                .collect()
+        };
+        let placements = placed(&level);
+        let small_placements = placed(&small);
+        let lut = DirectionLut::new(&bviews, DirectionLut::DEFAULT_RESOLUTION).map_err(option)?;
+        let res = p.cube_resolution as usize;
+        // MNP01 §3.3 one level down: each small branch sees the rest of its own main branch.
+        let mut small_cubes = Vec::new();
+        for r in &small.ranges {
+            let within = &small_placements[r[0] as usize..r[1] as usize];
+            small_cubes.extend(branch_cubes(&small_objects, within, &lut, p.tile, res));
+        }
+        // MNP01 §6.1 one level down: a main branch with small branches rendered from them.
+        if compose {
+            let per = visibility::CORNERS * visibility::FACES * res * res;
+            for (k, r) in small.ranges.iter().enumerate() {
+                let (a, b) = (r[0] as usize, r[1] as usize);
+                if a == b {
+                    continue;
+                }
+                let o = &objects[k];
+                let (direct, ambient) = super::compose::from_level_below(
+                    &super::compose::LevelBelow {
+                        objects: &small_objects,
+                        placements: &small_placements[a..b],
+                        cubes: &small_cubes[a * per..b * per],
+                        cube_resolution: p.cube_resolution,
+                        branch_views: &bviews,
+                        branch_lights: &blights,
+                    },
+                    &bviews,
+                    &blights,
+                    (Vec3::from(o.bbox_min), Vec3::from(o.bbox_max)),
+                    p.tile,
+                    p.supersample.min(2),
+                    p.compose_min_weight,
+                )
+                .map_err(option)?;
+                objects[k].direct = direct;
+                objects[k].ambient = ambient;
+            }
+        }
+        let cubes = branch_cubes(&objects, &placements, &lut, p.tile, res);
+        if compose {
+            (direct, ambient) = super::compose::from_level_below(
                 &super::compose::LevelBelow {
-                    objects: &small_objects,
-                    placements: &small_placements[a..b],
-                    cubes: &small_cubes[a * per..b * per],
+                    objects: &objects,
+                    placements: &placements,
+                    cubes: &cubes,
                     cube_resolution: p.cube_resolution,
                     branch_views: &bviews,
                     branch_lights: &blights,
                 },
-                &bviews,
-                &blights,
-                (Vec3::from(o.bbox_min), Vec3::from(o.bbox_max)),
+                &views,
+                &lights,
+                (Vec3::from(plant.bbox_min), Vec3::from(plant.bbox_max)),
                 p.tile,
                 p.supersample.min(2),
                 p.compose_min_weight,
             )
             .map_err(option)?;
-            objects[k].direct = direct;
-            objects[k].ambient = ambient;
+            progress(total, total);
         }
-    }
-    let cubes = branch_cubes(&objects, &placements, &lut, p.tile, res);
-    if compose {
-        (direct, ambient) = super::compose::from_level_below(
-            &super::compose::LevelBelow {
-                objects: &objects,
-                placements: &placements,
-                cubes: &cubes,
-                cube_resolution: p.cube_resolution,
-                branch_views: &bviews,
-                branch_lights: &blights,
+        Ok(HbtBaked {
+            tile: p.tile,
+            view_level: p.view_level,
+            light_level: p.light_level,
+            bbox_min: plant.bbox_min,
+            bbox_max: plant.bbox_max,
+            direct,
+            ambient,
+            branch_view_level: p.branch_view_level,
+            branch_light_level: p.branch_light_level,
+            objects,
+            placements,
+            cube_resolution: p.cube_resolution,
+            cubes,
+            small: SmallLevel {
+                objects: small_objects,
+                ranges: small.ranges,
+                placements: small_placements,
+                cubes: small_cubes,
             },
-            &views,
-            &lights,
-            (Vec3::from(plant.bbox_min), Vec3::from(plant.bbox_max)),
-            p.tile,
-            p.supersample.min(2),
-            p.compose_min_weight,
-        )
-        .map_err(option)?;
-        progress(total, total);
+        })
     }
-    Ok(HbtBaked {
-        tile: p.tile,
-        view_level: p.view_level,
-        light_level: p.light_level,
-        bbox_min: plant.bbox_min,
-        bbox_max: plant.bbox_max,
-        direct,
-        ambient,
-        branch_view_level: p.branch_view_level,
-        branch_light_level: p.branch_light_level,
-        objects,
-        placements,
-        cube_resolution: p.cube_resolution,
-        cubes,
-        small: SmallLevel {
-            objects: small_objects,
-            ranges: small.ranges,
-            placements: small_placements,
-            cubes: small_cubes,
-        },
-    })
 }

@@ -92,9 +92,73 @@ impl OctahedralBaked {
             .map(|l| (l.color.len() + l.normal.len()) as u64)
             .sum()
     }
+}
 
+/// `octahedral`'s offline half: one plant's grid of views.
+pub struct OctahedralBake;
+
+impl crate::bake::Bake for OctahedralBake {
+    const NAME: &'static str = "octahedral";
+    const FORMAT_VERSION: u32 = FORMAT_VERSION;
+    type Params = OctahedralBakeParams;
+    type Asset = OctahedralBaked;
+
+    fn describe(b: &OctahedralBaked) -> crate::bake::AssetSummary {
+        let mut fields = serde_json::Map::new();
+        fields.insert("grid".into(), b.grid.into());
+        fields.insert("views".into(), b.tiles.len().into());
+        crate::bake::AssetSummary {
+            line: format!(
+                "{} views ({}×{} grid) of {}²",
+                b.tiles.len(),
+                b.grid,
+                b.grid,
+                b.tile
+            ),
+            image_bytes: b.image_bytes(),
+            images: b.tiles.len(),
+            tile: b.tile,
+            fields,
+        }
+    }
+
+    /// Bakes `plant`: every grid view, whole plant (wood and leaves), through the shared baker.
+    fn bake(
+        gpu: &Gpu,
+        plant: &Plant,
+        p: &OctahedralBakeParams,
+        progress: &mut dyn FnMut(usize, usize),
+    ) -> Result<OctahedralBaked, RenderError> {
+        // The whole plant: one index range of each mesh.
+        let leaves: Vec<std::ops::Range<u32>> =
+            std::iter::once(0..plant.leaves.indices.len() as u32).collect();
+        let wood: Vec<std::ops::Range<u32>> =
+            std::iter::once(0..plant.wood.indices.len() as u32).collect();
+        let requests: Vec<BakeRequest> = (0..p.grid * p.grid)
+            .map(|k| BakeRequest {
+                frame: view_frame(plant, grid_direction(p.grid, k % p.grid, k / p.grid)),
+                side: 1.0,
+                leaves: leaves.clone(),
+                wood: wood.clone(),
+            })
+            .collect();
+        let frame = requests[0].frame;
+        let baker = PlantBaker::new(gpu, plant, p.tile, p.supersample)?;
+        let total = requests.len();
+        let images = baker.bake(gpu, &requests, |done| progress(done, total))?;
+        Ok(OctahedralBaked {
+            grid: p.grid,
+            tile: p.tile,
+            centre: frame.centre.to_array(),
+            radius: frame.half.x,
+            tiles: images.iter().map(|t| t.levels()).collect(),
+        })
+    }
+}
+
+impl crate::bake::codec::Codec for OctahedralBaked {
     /// The payload written to the cache.
-    pub fn encode(&self) -> Vec<u8> {
+    fn encode(&self) -> Vec<u8> {
         let mut e = Encoder::default();
         e.u32(self.grid);
         e.u32(self.tile);
@@ -108,7 +172,7 @@ impl OctahedralBaked {
     }
 
     /// Reads a payload back, checking every count and size.
-    pub fn decode(bytes: &[u8]) -> Result<Self, DecodeError> {
+    fn decode(bytes: &[u8]) -> Result<Self, DecodeError> {
         let bad = |m: String| DecodeError(m);
         let mut d = Decoder::new(bytes);
         let grid = d.u32()?;
@@ -143,66 +207,6 @@ impl OctahedralBaked {
             tiles,
         })
     }
-}
-
-/// `octahedral`'s offline half: one plant's grid of views.
-pub struct OctahedralBake;
-
-impl crate::bake::Bake for OctahedralBake {
-    const NAME: &'static str = "octahedral";
-    const FORMAT_VERSION: u32 = FORMAT_VERSION;
-    type Params = OctahedralBakeParams;
-    type Asset = OctahedralBaked;
-
-    fn bake(
-        gpu: &Gpu,
-        plant: &Plant,
-        params: &OctahedralBakeParams,
-        progress: &mut dyn FnMut(usize, usize),
-    ) -> Result<OctahedralBaked, RenderError> {
-        bake(gpu, plant, params, progress)
-    }
-
-    fn encode(asset: &OctahedralBaked) -> Vec<u8> {
-        asset.encode()
-    }
-
-    fn decode(bytes: &[u8]) -> Result<OctahedralBaked, DecodeError> {
-        OctahedralBaked::decode(bytes)
-    }
-}
-
-/// Bakes `plant`: every grid view, whole plant (wood and leaves), through the shared baker.
-pub fn bake(
-    gpu: &Gpu,
-    plant: &Plant,
-    p: &OctahedralBakeParams,
-    mut progress: impl FnMut(usize, usize),
-) -> Result<OctahedralBaked, RenderError> {
-    // The whole plant: one index range of each mesh.
-    let leaves: Vec<std::ops::Range<u32>> =
-        std::iter::once(0..plant.leaves.indices.len() as u32).collect();
-    let wood: Vec<std::ops::Range<u32>> =
-        std::iter::once(0..plant.wood.indices.len() as u32).collect();
-    let requests: Vec<BakeRequest> = (0..p.grid * p.grid)
-        .map(|k| BakeRequest {
-            frame: view_frame(plant, grid_direction(p.grid, k % p.grid, k / p.grid)),
-            side: 1.0,
-            leaves: leaves.clone(),
-            wood: wood.clone(),
-        })
-        .collect();
-    let frame = requests[0].frame;
-    let baker = PlantBaker::new(gpu, plant, p.tile, p.supersample)?;
-    let total = requests.len();
-    let images = baker.bake(gpu, &requests, |done| progress(done, total))?;
-    Ok(OctahedralBaked {
-        grid: p.grid,
-        tile: p.tile,
-        centre: frame.centre.to_array(),
-        radius: frame.half.x,
-        tiles: images.iter().map(|t| t.levels()).collect(),
-    })
 }
 
 #[cfg(test)]

@@ -72,7 +72,7 @@ pub use draw::Octahedral;
 
 use super::Built;
 use super::params::{self, ParamDoc, ParamTable};
-use super::registry::{BakeSummary, Entry, Kind};
+use super::registry::{self, Entry, Kind};
 
 /// Shadow casters' depth is pushed this fraction of the plant's radius away from the sun.
 pub const SHADOW_OFFSET: f32 = 0.04;
@@ -225,33 +225,7 @@ pub const ENTRY: Entry = Entry {
             reports,
         })
     },
-    bake: Some(|job| {
-        let (bake, _) = resolve(job.settings)?;
-        let (b, report) = crate::bake::load_or_bake::<OctahedralBake>(
-            job.gpu,
-            job.plant,
-            &bake,
-            job.policy,
-            job.progress,
-        )?;
-        let mut fields = serde_json::Map::new();
-        fields.insert("grid".into(), b.grid.into());
-        fields.insert("views".into(), b.tiles.len().into());
-        Ok(BakeSummary {
-            line: format!(
-                "{} views ({}×{} grid) of {}²",
-                b.tiles.len(),
-                b.grid,
-                b.grid,
-                b.tile
-            ),
-            report,
-            image_bytes: b.image_bytes(),
-            images: b.tiles.len(),
-            tile: b.tile,
-            fields,
-        })
-    }),
+    bake: Some(registry::bake_with::<OctahedralBake, OctahedralDrawParams>),
     shaders: || vec![("octahedral", shader_source())],
 };
 

@@ -198,116 +198,6 @@ impl HbtBaked {
             .flat_map(|o| o.direct.iter().chain(&o.ambient)));
         (sum(&mut self.direct.iter().chain(&self.ambient)), objects)
     }
-
-    /// The payload written to the cache.
-    pub fn encode(&self) -> Vec<u8> {
-        let mut e = Encoder::default();
-        e.u32s(&[
-            self.tile,
-            self.view_level,
-            self.light_level,
-            self.branch_view_level,
-            self.branch_light_level,
-            self.cube_resolution,
-        ]);
-        e.f32s(&self.bbox_min);
-        e.f32s(&self.bbox_max);
-        encode_images(&mut e, &self.direct, &self.ambient);
-        encode_level(&mut e, &self.objects, &self.placements, &self.cubes);
-        let s = &self.small;
-        encode_level(&mut e, &s.objects, &s.placements, &s.cubes);
-        e.u32s(s.ranges.as_flattened());
-        e.buf
-    }
-
-    /// Reads a payload back, checking every count and size against the header.
-    pub fn decode(bytes: &[u8]) -> Result<Self, DecodeError> {
-        let bad = |m: String| DecodeError(m);
-        let mut d = Decoder::new(bytes);
-        let head = d.u32s()?;
-        let [
-            tile,
-            view_level,
-            light_level,
-            branch_view_level,
-            branch_light_level,
-            cube_resolution,
-        ] = head[..]
-        else {
-            return Err(bad("header is not 6 integers".into()));
-        };
-        if !tile.is_power_of_two() || !(1..=crate::bake::MAX_TILE).contains(&tile) {
-            return Err(bad(format!("tile {tile} is not a power of two up to 1024")));
-        }
-        let max = crate::directions::MAX_LEVEL;
-        for (a, b) in [
-            (view_level, light_level),
-            (branch_view_level, branch_light_level),
-        ] {
-            if a > max || b > max {
-                return Err(bad(format!("direction levels {a}/{b} (0–{max} allowed)")));
-            }
-        }
-        if !(1..=MAX_CUBE_RESOLUTION).contains(&cube_resolution) {
-            return Err(bad(format!("cube-map resolution {cube_resolution}")));
-        }
-        let bbox_min = arr3(d.f32s()?)?;
-        let bbox_max = arr3(d.f32s()?)?;
-        let counts = crate::directions::SAMPLE_COUNTS;
-        let (views, lights) = (counts[view_level as usize], counts[light_level as usize]);
-        let (direct, ambient) = decode_images(&mut d, tile, views, lights)?;
-        let (bviews, blights) = (
-            counts[branch_view_level as usize],
-            counts[branch_light_level as usize],
-        );
-        let (objects, placements, cubes) =
-            decode_level(&mut d, tile, bviews, blights, cube_resolution)?;
-        let (sobjects, splacements, scubes) =
-            decode_level(&mut d, tile, bviews, blights, cube_resolution)?;
-        let flat = d.u32s()?;
-        if !(flat.is_empty() || flat.len() == 2 * objects.len()) {
-            return Err(bad(format!(
-                "{} small-level range bounds for {} objects",
-                flat.len(),
-                objects.len()
-            )));
-        }
-        let ranges: Vec<[u32; 2]> = flat.chunks_exact(2).map(|r| [r[0], r[1]]).collect();
-        if let Some(r) = ranges
-            .iter()
-            .find(|r| r[0] > r[1] || r[1] as usize > splacements.len())
-        {
-            return Err(bad(format!(
-                "small-level range {}..{} of {} placements",
-                r[0],
-                r[1],
-                splacements.len()
-            )));
-        }
-        let small = SmallLevel {
-            objects: sobjects,
-            ranges,
-            placements: splacements,
-            cubes: scubes,
-        };
-        d.finish()?;
-        Ok(Self {
-            tile,
-            view_level,
-            light_level,
-            bbox_min,
-            bbox_max,
-            direct,
-            ambient,
-            branch_view_level,
-            branch_light_level,
-            objects,
-            placements,
-            cube_resolution,
-            cubes,
-            small,
-        })
-    }
 }
 
 /// Writes one level below the tree: its objects, placements and cube-maps.
@@ -462,9 +352,122 @@ fn decode_images(
     Ok((direct, ambient))
 }
 
+impl crate::bake::codec::Codec for HbtBaked {
+    /// The payload written to the cache.
+    fn encode(&self) -> Vec<u8> {
+        let mut e = Encoder::default();
+        e.u32s(&[
+            self.tile,
+            self.view_level,
+            self.light_level,
+            self.branch_view_level,
+            self.branch_light_level,
+            self.cube_resolution,
+        ]);
+        e.f32s(&self.bbox_min);
+        e.f32s(&self.bbox_max);
+        encode_images(&mut e, &self.direct, &self.ambient);
+        encode_level(&mut e, &self.objects, &self.placements, &self.cubes);
+        let s = &self.small;
+        encode_level(&mut e, &s.objects, &s.placements, &s.cubes);
+        e.u32s(s.ranges.as_flattened());
+        e.buf
+    }
+
+    /// Reads a payload back, checking every count and size against the header.
+    fn decode(bytes: &[u8]) -> Result<Self, DecodeError> {
+        let bad = |m: String| DecodeError(m);
+        let mut d = Decoder::new(bytes);
+        let head = d.u32s()?;
+        let [
+            tile,
+            view_level,
+            light_level,
+            branch_view_level,
+            branch_light_level,
+            cube_resolution,
+        ] = head[..]
+        else {
+            return Err(bad("header is not 6 integers".into()));
+        };
+        if !tile.is_power_of_two() || !(1..=crate::bake::MAX_TILE).contains(&tile) {
+            return Err(bad(format!("tile {tile} is not a power of two up to 1024")));
+        }
+        let max = crate::directions::MAX_LEVEL;
+        for (a, b) in [
+            (view_level, light_level),
+            (branch_view_level, branch_light_level),
+        ] {
+            if a > max || b > max {
+                return Err(bad(format!("direction levels {a}/{b} (0–{max} allowed)")));
+            }
+        }
+        if !(1..=MAX_CUBE_RESOLUTION).contains(&cube_resolution) {
+            return Err(bad(format!("cube-map resolution {cube_resolution}")));
+        }
+        let bbox_min = arr3(d.f32s()?)?;
+        let bbox_max = arr3(d.f32s()?)?;
+        let counts = crate::directions::SAMPLE_COUNTS;
+        let (views, lights) = (counts[view_level as usize], counts[light_level as usize]);
+        let (direct, ambient) = decode_images(&mut d, tile, views, lights)?;
+        let (bviews, blights) = (
+            counts[branch_view_level as usize],
+            counts[branch_light_level as usize],
+        );
+        let (objects, placements, cubes) =
+            decode_level(&mut d, tile, bviews, blights, cube_resolution)?;
+        let (sobjects, splacements, scubes) =
+            decode_level(&mut d, tile, bviews, blights, cube_resolution)?;
+        let flat = d.u32s()?;
+        if !(flat.is_empty() || flat.len() == 2 * objects.len()) {
+            return Err(bad(format!(
+                "{} small-level range bounds for {} objects",
+                flat.len(),
+                objects.len()
+            )));
+        }
+        let ranges: Vec<[u32; 2]> = flat.chunks_exact(2).map(|r| [r[0], r[1]]).collect();
+        if let Some(r) = ranges
+            .iter()
+            .find(|r| r[0] > r[1] || r[1] as usize > splacements.len())
+        {
+            return Err(bad(format!(
+                "small-level range {}..{} of {} placements",
+                r[0],
+                r[1],
+                splacements.len()
+            )));
+        }
+        let small = SmallLevel {
+            objects: sobjects,
+            ranges,
+            placements: splacements,
+            cubes: scubes,
+        };
+        d.finish()?;
+        Ok(Self {
+            tile,
+            view_level,
+            light_level,
+            bbox_min,
+            bbox_max,
+            direct,
+            ambient,
+            branch_view_level,
+            branch_light_level,
+            objects,
+            placements,
+            cube_resolution,
+            cubes,
+            small,
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::bake::codec::Codec;
 
     #[test]
     fn payload_round_trips_and_rejects_truncation() {
