@@ -323,9 +323,20 @@ impl BoxTree {
             res_ranges: vec![vec![0..0; total_boxes]; PASSES],
         })
     }
+}
+
+impl Technique for BoxTree {
+    fn name(&self) -> &'static str {
+        super::ENTRY.name
+    }
 
     /// Per frame: each culled tree's box-tree traversal per pass, sorted and uploaded.
-    pub fn update(&mut self, gpu: &Gpu, input: &FrameInput<'_>) -> Result<(), RenderError> {
+    fn prepare_frame(
+        &mut self,
+        gpu: &Gpu,
+        _: &mut wgpu::CommandEncoder,
+        input: &FrameInput<'_>,
+    ) -> Result<(), RenderError> {
         let camera = LodView {
             eye: input.eye,
             pixels_per_metre: input.pixels_per_metre / self.draw.texel_pixels,
@@ -409,21 +420,6 @@ impl BoxTree {
         self.residual
             .write(gpu, bytemuck::cast_slice(&self.res_staging))?;
         Ok(())
-    }
-}
-
-impl Technique for BoxTree {
-    fn name(&self) -> &'static str {
-        super::ENTRY.name
-    }
-
-    fn prepare_frame(
-        &mut self,
-        gpu: &Gpu,
-        _: &mut wgpu::CommandEncoder,
-        input: &FrameInput<'_>,
-    ) -> Result<(), RenderError> {
-        self.update(gpu, input)
     }
 
     fn draw(&self, pass: &mut wgpu::RenderPass<'_>, ctx: &DrawContext<'_>) -> DrawCounts {

@@ -137,10 +137,19 @@ fn unit8(v: [u8; 8]) -> [f32; 8] {
     v.map(|x| x as f32 / 255.0)
 }
 
-impl Hbt {
+impl Technique for Hbt {
+    fn name(&self) -> &'static str {
+        super::ENTRY.name
+    }
+
     /// Per frame: each culled tree's levels, direction look-ups and visibility, sorted and
     /// uploaded.
-    pub fn update(&mut self, gpu: &Gpu, input: &FrameInput<'_>) -> Result<(), RenderError> {
+    fn prepare_frame(
+        &mut self,
+        gpu: &Gpu,
+        _: &mut wgpu::CommandEncoder,
+        input: &FrameInput<'_>,
+    ) -> Result<(), RenderError> {
         self.staging.clear();
         self.mesh_staging.clear();
         self.opened = 0;
@@ -422,21 +431,6 @@ impl Hbt {
             .write(gpu, bytemuck::cast_slice(&self.mesh_staging))?;
         self.instances
             .write(gpu, bytemuck::cast_slice(&self.staging))
-    }
-}
-
-impl Technique for Hbt {
-    fn name(&self) -> &'static str {
-        super::ENTRY.name
-    }
-
-    fn prepare_frame(
-        &mut self,
-        gpu: &Gpu,
-        _: &mut wgpu::CommandEncoder,
-        input: &FrameInput<'_>,
-    ) -> Result<(), RenderError> {
-        self.update(gpu, input)
     }
 
     fn draw(&self, pass: &mut wgpu::RenderPass<'_>, ctx: &DrawContext<'_>) -> DrawCounts {

@@ -236,9 +236,20 @@ impl Octahedral {
             ranges: std::array::from_fn(|_| 0..0),
         })
     }
+}
+
+impl Technique for Octahedral {
+    fn name(&self) -> &'static str {
+        super::ENTRY.name
+    }
 
     /// Per frame: every culled tree's quad, the camera pass sorted back to front, uploaded.
-    pub fn update(&mut self, gpu: &Gpu, input: &FrameInput<'_>) -> Result<(), RenderError> {
+    fn prepare_frame(
+        &mut self,
+        gpu: &Gpu,
+        _: &mut wgpu::CommandEncoder,
+        input: &FrameInput<'_>,
+    ) -> Result<(), RenderError> {
         self.staging.clear();
         for pass in 0..PASSES {
             self.sort.clear();
@@ -269,21 +280,6 @@ impl Octahedral {
         }
         self.instances
             .write(gpu, bytemuck::cast_slice(&self.staging))
-    }
-}
-
-impl Technique for Octahedral {
-    fn name(&self) -> &'static str {
-        super::ENTRY.name
-    }
-
-    fn prepare_frame(
-        &mut self,
-        gpu: &Gpu,
-        _: &mut wgpu::CommandEncoder,
-        input: &FrameInput<'_>,
-    ) -> Result<(), RenderError> {
-        self.update(gpu, input)
     }
 
     fn draw(&self, pass: &mut wgpu::RenderPass<'_>, ctx: &DrawContext<'_>) -> DrawCounts {
