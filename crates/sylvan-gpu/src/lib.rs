@@ -14,7 +14,7 @@ mod target;
 mod timer;
 
 pub use context::{Gpu, GpuError, INSTALL_HINT};
-pub use readback::{read_rgba8, read_texture_bytes};
+pub use readback::{read_buffer_bytes, read_rgba8, read_texture_bytes};
 pub use resolve::{OUTPUT_FORMAT, RESOLVE_WGSL, Resolver};
 pub use target::{DEPTH_FORMAT, RenderTarget};
 pub use timer::{FrameTimer, TimerKind};

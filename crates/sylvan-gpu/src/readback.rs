@@ -54,6 +54,28 @@ pub fn read_texture_bytes(gpu: &Gpu, texture: &wgpu::Texture) -> Result<Vec<u8>,
     Ok(bytes)
 }
 
+/// Reads a whole buffer (it needs `COPY_SRC` usage) back to the CPU, through a staging copy.
+pub fn read_buffer_bytes(gpu: &Gpu, buffer: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+    let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("buffer_readback"),
+        size: buffer.size(),
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, buffer.size());
+    gpu.queue.submit([encoder.finish()]);
+    let slice = staging.slice(..);
+    slice.map_async(wgpu::MapMode::Read, |_| {});
+    gpu.wait()?;
+    let bytes = slice
+        .get_mapped_range()
+        .map_err(|e| GpuError::Wgpu(e.to_string()))?
+        .to_vec();
+    staging.unmap();
+    Ok(bytes)
+}
+
 /// Reads a 4-byte-per-texel texture (e.g. the sRGB output target) into an RGBA image.
 pub fn read_rgba8(gpu: &Gpu, texture: &wgpu::Texture) -> Result<image::RgbaImage, GpuError> {
     let format = texture.format();

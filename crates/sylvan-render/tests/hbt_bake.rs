@@ -1,5 +1,6 @@
 //! `hbt` (MNP01) bakes: the baked BTF holds lighting with self-shadowing, the reconstruction
-//! weights are a partition of unity, the level below gets its own BTFs, placements and
+//! weights are a partition of unity and the GPU's direction look-up and pair weights agree with
+//! the CPU's, the level below gets its own BTFs, placements and
 //! cube-maps, bakes are cached by their parameters, and species sharing a plant share images.
 
 mod common;
@@ -10,7 +11,7 @@ use glam::Vec3;
 use sylvan_render::bake::Bake;
 use sylvan_render::bake::CachePolicy;
 use sylvan_render::bake::codec::Codec;
-use sylvan_render::directions::DirectionSet;
+use sylvan_render::directions::{self, DIRECTIONS_WGSL, DirectionLut, DirectionSet};
 use sylvan_render::technique::hbt::{self, HbtBake, HbtBaked};
 use sylvan_scene::{Camera, TreeInstance};
 
@@ -148,6 +149,154 @@ fn reconstruction_weights_are_a_partition_of_unity() {
             assert!(w.iter().all(|&x| x == 0.0 || x >= 0.05), "{w:?}");
         }
     }
+}
+
+/// MNP01's 3×3 reconstruction, CPU and GPU: `DIRECTIONS_WGSL`'s `dir_lookup` (view and light)
+/// and `dir_pair_weights`, run in a compute shader over 4,096 direction pairs on the adapter,
+/// agree with `DirectionLut::lookup` and `directions::pair_weights` on the CPU: the same 3
+/// samples (except at cell ties, where either cell is right) and the same 9 weights.
+#[test]
+fn gpu_reconstruction_agrees_with_the_cpu() {
+    use wgpu::util::DeviceExt;
+    let gpu = gpu();
+    let set = DirectionSet::new(2).unwrap();
+    let lut = DirectionLut::new(&set, DirectionLut::DEFAULT_RESOLUTION).unwrap();
+    let n = 4096;
+    let (vd, ld) = (directions(3, n), directions(5, n));
+    // Scaled (the look-up normalises) and a min weight per pair, 0 to 0.3.
+    let input: Vec<[f32; 4]> = (0..n)
+        .flat_map(|i| {
+            let m = 0.3 * (i % 7) as f32 / 6.0;
+            [
+                (vd[i] * 3.0).extend(m).to_array(),
+                (ld[i] * 0.5).extend(0.0).to_array(),
+            ]
+        })
+        .collect();
+    const OUT: usize = 7;
+    let source = format!(
+        "{}{DIRECTIONS_WGSL}
+@group(0) @binding(3) var<storage, read> input: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read_write> output: array<vec4<f32>>;
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {{
+    let i = id.x;
+    if i >= arrayLength(&input) / 2u {{ return; }}
+    let v = dir_lookup(input[2u * i].xyz);
+    let l = dir_lookup(input[2u * i + 1u].xyz);
+    let w = dir_pair_weights(v.weights, l.weights, input[2u * i].w);
+    let o = {OUT}u * i;
+    output[o] = vec4<f32>(vec3<f32>(v.indices), 0.0);
+    output[o + 1u] = vec4<f32>(vec3<f32>(l.indices), 0.0);
+    output[o + 2u] = vec4<f32>(v.weights, 0.0);
+    output[o + 3u] = vec4<f32>(l.weights, 0.0);
+    output[o + 4u] = vec4<f32>(w[0], w[1], w[2], w[3]);
+    output[o + 5u] = vec4<f32>(w[4], w[5], w[6], w[7]);
+    output[o + 6u] = vec4<f32>(w[8], 0.0, 0.0, 0.0);
+}}
+",
+        DirectionLut::bindings_wgsl(0, 0)
+    );
+    let device = &gpu.device;
+    let storage = |label: &str, bytes: &[u8], extra: wgpu::BufferUsages| {
+        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: bytes,
+            usage: wgpu::BufferUsages::STORAGE | extra,
+        })
+    };
+    let texels = storage("dir_texels", lut.as_bytes(), wgpu::BufferUsages::empty());
+    let faces = storage(
+        "dir_faces",
+        bytemuck::cast_slice(&set.gpu_faces()),
+        wgpu::BufferUsages::empty(),
+    );
+    let samples = storage(
+        "dir_samples",
+        bytemuck::cast_slice(&set.gpu_samples()),
+        wgpu::BufferUsages::empty(),
+    );
+    let input_buf = storage(
+        "input",
+        bytemuck::cast_slice(&input),
+        wgpu::BufferUsages::empty(),
+    );
+    let output = storage(
+        "output",
+        &vec![0u8; n * OUT * 16],
+        wgpu::BufferUsages::COPY_SRC,
+    );
+    let module = sylvan_gpu::shader(&gpu, "reconstruction_test", &source);
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("reconstruction_test"),
+        layout: None,
+        module: &module,
+        entry_point: Some("main"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[&texels, &faces, &samples, &input_buf, &output]
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect::<Vec<_>>(),
+    });
+    let mut encoder = device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &bind, &[]);
+        pass.dispatch_workgroups((n as u32).div_ceil(64), 1, 1);
+    }
+    gpu.queue.submit([encoder.finish()]);
+    let bytes = sylvan_gpu::read_buffer_bytes(&gpu, &output).unwrap();
+    let out: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
+    let (mut ties, mut compared) = (0, 0);
+    for i in 0..n {
+        let o = &out[OUT * i..OUT * (i + 1)];
+        let (vi, vw) = lut.lookup(vd[i] * 3.0);
+        let (li, lw) = lut.lookup(ld[i] * 0.5);
+        let gpu_vi = [o[0][0], o[0][1], o[0][2]].map(|x| x as u32);
+        let gpu_li = [o[1][0], o[1][1], o[1][2]].map(|x| x as u32);
+        if gpu_vi != vi || gpu_li != li {
+            // Only where a direction sits on a cell edge: the CPU's smallest weight is ~0.
+            let edge = vw.iter().chain(&lw).fold(1.0f32, |a, &b| a.min(b));
+            assert!(
+                edge < 1e-4,
+                "pair {i}: GPU {gpu_vi:?}/{gpu_li:?} CPU {vi:?}/{li:?}"
+            );
+            ties += 1;
+            continue;
+        }
+        compared += 1;
+        for k in 0..3 {
+            assert!((o[2][k] - vw[k]).abs() < 1e-5, "pair {i} view weight {k}");
+            assert!((o[3][k] - lw[k]).abs() < 1e-5, "pair {i} light weight {k}");
+        }
+        let gw = [
+            o[4][0], o[4][1], o[4][2], o[4][3], o[5][0], o[5][1], o[5][2], o[5][3], o[6][0],
+        ];
+        // The GPU's own inputs, so the threshold cuts the same products.
+        let cpu = directions::pair_weights(
+            [o[2][0], o[2][1], o[2][2]],
+            [o[3][0], o[3][1], o[3][2]],
+            input[2 * i][3],
+        );
+        for k in 0..9 {
+            assert!(
+                (gw[k] - cpu[k]).abs() < 1e-5,
+                "pair {i} weight {k}: GPU {gw:?} CPU {cpu:?}"
+            );
+        }
+    }
+    eprintln!("{compared} pairs agree, {ties} at cell ties");
+    assert!(compared >= n * 99 / 100, "{ties} ties of {n}");
 }
 
 #[test]

@@ -36,6 +36,36 @@ pub use lut::{DirectionLut, GpuDirTexel};
 pub use set::{DirectionSet, GpuDirFace, GpuDirSample};
 pub use wgsl::DIRECTIONS_WGSL;
 
+/// MNP01 §4.1: the 9 pair weights `view_w[i] · light_w[j]` (row-major, view major) of a view
+/// and a light look-up, with those below `min_weight` dropped and the rest renormalised to sum
+/// to 1. When every product is below the threshold, the largest alone is kept. The same rule
+/// as `dir_pair_weights` in [`DIRECTIONS_WGSL`] (a test runs both on the GPU and the CPU).
+pub fn pair_weights(view_w: [f32; 3], light_w: [f32; 3], min_weight: f32) -> [f32; 9] {
+    let mut w = [0.0f32; 9];
+    let mut best = 0;
+    for (k, out) in w.iter_mut().enumerate() {
+        *out = view_w[k / 3].max(0.0) * light_w[k % 3].max(0.0);
+    }
+    for k in 1..9 {
+        if w[k] > w[best] {
+            best = k;
+        }
+    }
+    let mut sum = 0.0;
+    for x in &mut w {
+        if *x < min_weight {
+            *x = 0.0;
+        }
+        sum += *x;
+    }
+    if sum <= 0.0 {
+        w = [0.0; 9];
+        w[best] = 1.0;
+        return w;
+    }
+    w.map(|x| x / sum)
+}
+
 /// Subdivision levels MNP01 §3.1 uses: 0..=3.
 pub const MAX_LEVEL: u32 = 3;
 

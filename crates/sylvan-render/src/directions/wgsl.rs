@@ -1,5 +1,5 @@
-//! [`DIRECTIONS_WGSL`]: the table lookup of [`super::DirectionLut::lookup`] for shaders, and
-//! its naga validation.
+//! [`DIRECTIONS_WGSL`]: the table lookup of [`super::DirectionLut::lookup`] and the pair
+//! weights of [`super::pair_weights`] for shaders, and its naga validation.
 
 /// WGSL of [`DirectionLut::lookup`](super::DirectionLut::lookup): `fn dir_lookup(d: vec3<f32>) -> DirLookup` returns the 3
 /// sample indices and weights for direction `d` (any length). Put
@@ -68,6 +68,30 @@ fn dir_lookup(d_in: vec3<f32>) -> DirLookup {
     let sum = w.x + w.y + w.z;
     out.weights = select(vec3<f32>(1.0, 0.0, 0.0), w / sum, sum > 0.0);
     return out;
+}
+
+// MNP01 §4.1 (= directions::pair_weights): the 9 pair weights view_w[i] · light_w[j], view
+// major, those below min_weight dropped and the rest renormalised; all below: the largest alone.
+fn dir_pair_weights(view_w: vec3<f32>, light_w: vec3<f32>, min_weight: f32) -> array<f32, 9> {
+    var w: array<f32, 9>;
+    var best = 0u;
+    for (var k = 0u; k < 9u; k++) {
+        w[k] = max(view_w[k / 3u], 0.0) * max(light_w[k % 3u], 0.0);
+        if k > 0u && w[k] > w[best] {
+            best = k;
+        }
+    }
+    var sum = 0.0;
+    for (var k = 0u; k < 9u; k++) {
+        if w[k] < min_weight {
+            w[k] = 0.0;
+        }
+        sum += w[k];
+    }
+    for (var k = 0u; k < 9u; k++) {
+        w[k] = select(w[k] / sum, select(0.0, 1.0, k == best), sum <= 0.0);
+    }
+    return w;
 }
 "#;
 #[cfg(test)]
