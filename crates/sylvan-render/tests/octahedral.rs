@@ -181,3 +181,68 @@ fn octahedral_shader_validates() {
     .validate(&module)
     .unwrap_or_else(|e| panic!("{label}: {}", e.emit_to_string(&source)));
 }
+
+/// The "colour by technique" debug view tints each technique's trees with its registry colour
+/// (ids and colours come from the registry, not from numbers in WGSL): for every per-tree
+/// technique, one tree drawn by its coarsest level (boxtree's root images, hbt's tree level),
+/// the mean colour of the tree's pixels has the registry colour's weakest channel weakest and
+/// (where it is unique) its strongest channel strongest.
+#[test]
+fn colour_by_technique_uses_each_registry_colour() {
+    use sylvan_render::registry::{Kind, REGISTRY};
+    let sun = common::sun(140.0, 35.0);
+    let eye = Vec3::new(0.0, 6.0, -30.0);
+    let closed: Vec<sylvan_scene::Setting> = ["boxtree.texel_pixels=60", "hbt.levels=1"]
+        .iter()
+        .map(|a| sylvan_scene::Setting::from_arg(a).unwrap())
+        .collect();
+    let scene = one_tree(eye, 0.0, sun, true);
+    let empty = one_tree(eye, 0.0, sun, false);
+    for e in REGISTRY.iter().filter(|e| e.kind == Kind::PerTree) {
+        let options = RenderOptions {
+            width: 96,
+            height: 96,
+            technique: e.name.into(),
+            debug: sylvan_render::DebugView::Technique,
+            settings: closed.clone(),
+            cache: CachePolicy::Off,
+            ..Default::default()
+        };
+        let plants = [common::test_tree()];
+        let bg = common::render_with_options(&gpu(), &empty, &plants, &options).0;
+        let img = common::render_with_options(&gpu(), &scene, &plants, &options).0;
+        let mut sum = [0.0f64; 3];
+        let mut n = 0;
+        for (a, b) in img.pixels().zip(bg.pixels()) {
+            if (0..3).any(|c| (a[c] as i32 - b[c] as i32).abs() > 12) {
+                (0..3).for_each(|c| sum[c] += a[c] as f64);
+                n += 1;
+            }
+        }
+        assert!(n > 20, "{}: the tree covers {n} pixels", e.name);
+        let order = |v: [f64; 3]| {
+            let mut i = [0, 1, 2];
+            i.sort_by(|&x, &y| v[x].total_cmp(&v[y]));
+            i
+        };
+        let want = e.debug_color.map(f64::from);
+        eprintln!(
+            "{}: mean {:?} over {n} px, registry {want:?}",
+            e.name,
+            sum.map(|s| s / n as f64)
+        );
+        let (got, expect) = (order(sum), order(want));
+        assert_eq!(
+            got[0], expect[0],
+            "{}: weakest of {sum:?} vs {want:?}",
+            e.name
+        );
+        if want[expect[2]] > want[expect[1]] {
+            assert_eq!(
+                got[2], expect[2],
+                "{}: strongest of {sum:?} vs {want:?}",
+                e.name
+            );
+        }
+    }
+}
