@@ -406,12 +406,13 @@ fn params_lists_every_key_of_every_technique() {
 
 #[test]
 fn band_tables_and_set_reach_the_technique() {
-    // A chain written as [[lod.band]] tables with their own parameters renders, and `--set`
-    // changes what a technique draws (boxtree opening every box: more triangles).
+    // A chain written as [[lod.band]] tables with their own parameters (geometry, boxtree,
+    // then the octahedral baseline far away) renders, and `--set` changes what a technique
+    // draws (boxtree opening every box: more triangles).
     let dir = workdir("bands");
     tiny_scene(&dir);
     let scene = format!(
-        "{TINY}\n[[lod.band]]\ntechnique = \"geometry\"\nfrom = 0\nto = 10\n[[lod.band]]\ntechnique = \"boxtree\"\nfrom = 10\nparams = {{ texel_pixels = 4 }}\n"
+        "{TINY}\n[[lod.band]]\ntechnique = \"geometry\"\nfrom = 0\nto = 10\n[[lod.band]]\ntechnique = \"boxtree\"\nfrom = 10\nto = 30\nparams = {{ texel_pixels = 4 }}\n[[lod.band]]\ntechnique = \"octahedral\"\nfrom = 30\n"
     );
     std::fs::write(dir.join("bands.toml"), scene).unwrap();
     let cache = dir.join("cache");
@@ -449,6 +450,7 @@ fn band_tables_and_set_reach_the_technique() {
         .map(|v| v.as_u64().unwrap())
         .sum();
     assert!(n >= 3, "{banded}");
+    assert!(banded["trees_drawn"]["octahedral"].as_u64() >= Some(1), "{banded}");
     let closed = render(&["--set", "boxtree.texel_pixels=60"]);
     let opened = render(&["--set", "boxtree.texel_pixels=0.1"]);
     assert!(
