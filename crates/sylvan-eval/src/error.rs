@@ -16,6 +16,36 @@ pub enum EvalError {
         /// Why.
         source: image::ImageError,
     },
+    /// An image file could not be read at all (missing, a device or FIFO, too large).
+    #[error("{}: {source} — {}", path.display(), source.fix())]
+    File {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: sylvan_io::ReadError,
+    },
+    /// The image header declares more pixels than [`crate::MAX_IMAGE_PIXELS`]; refused before
+    /// decoding.
+    #[error(
+        "{}: the image is {width}x{height}, more than the limit of {limit} pixels — compare images of at most 4096x4096 pixels (render at a smaller --size)",
+        path.display()
+    )]
+    TooManyPixels {
+        /// The file.
+        path: PathBuf,
+        /// Width from the header.
+        width: u32,
+        /// Height from the header.
+        height: u32,
+        /// The limit, pixels.
+        limit: u64,
+    },
+    /// An image file could not be written to a path that is a folder.
+    #[error("{}: cannot write image: it is a folder — give a file name, e.g. {}/out.png", path.display(), path.display())]
+    WriteToFolder {
+        /// The folder.
+        path: PathBuf,
+    },
     /// An image file could not be written.
     #[error("{}: cannot write image: {source} — check that the folder exists and is writable", path.display())]
     Write {

@@ -34,7 +34,7 @@ pub use error::EvalError;
 pub use fidelity::{FidelityRow, markdown_table};
 pub use flip::{Flip, PIXELS_PER_DEGREE, flip};
 pub use image::RgbImage;
-pub use io::{load_rgb, save_png};
+pub use io::{MAX_IMAGE_FILE_BYTES, MAX_IMAGE_PIXELS, load_rgb, save_png};
 pub use psnr::psnr;
 pub use ssim::ssim;
 

@@ -71,20 +71,8 @@ pub fn load_with(path: &Path, unit_scale: f32) -> Result<Plant, PlantError> {
     }
     match ext.as_str() {
         "lsys" => {
-            let len = std::fs::metadata(path)
-                .map_err(|e| io_error(&file, e))?
-                .len();
-            if len > lsystem::MAX_SOURCE_BYTES as u64 {
-                return Err(PlantError::file(
-                    &file,
-                    format!(
-                        "source is {len} bytes, more than {}",
-                        lsystem::MAX_SOURCE_BYTES
-                    ),
-                    "shorten the file",
-                ));
-            }
-            let src = std::fs::read_to_string(path).map_err(|e| io_error(&file, e))?;
+            let src = sylvan_io::read_to_string(path, lsystem::MAX_SOURCE_BYTES as u64)
+                .map_err(|e| io_error(&file, e))?;
             let ls = LSystem::parse(&src, &file)?;
             let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("plant");
             let mut p = from_lsystem(&ls, name)?;
@@ -102,12 +90,8 @@ pub fn load_with(path: &Path, unit_scale: f32) -> Result<Plant, PlantError> {
     }
 }
 
-pub(crate) fn io_error(file: &str, e: std::io::Error) -> PlantError {
-    PlantError::file(
-        file,
-        format!("cannot read: {e}"),
-        "check the path and permissions",
-    )
+pub(crate) fn io_error(file: &str, e: sylvan_io::ReadError) -> PlantError {
+    PlantError::file(file, e.to_string(), e.fix())
 }
 
 /// Builds a plant from a parsed L-system: derive, interpret, mesh, hierarchy, instancing.

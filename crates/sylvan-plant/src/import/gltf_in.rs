@@ -1,15 +1,179 @@
 //! glTF 2.0 reader: walks the default scene's node tree (world transforms applied), reads
 //! triangle primitives, sorts them into wood and leaves by material.
+//!
+//! Hostile files are refused before anything large is allocated: every byte read (the file, its
+//! external buffers, its texture files) goes through `sylvan_io` under one budget of
+//! [`super::MAX_IMPORT_BYTES`]; every accessor is checked against its buffer view (stride at least
+//! the element size, all elements inside the view, the view inside its buffer) so the `gltf`
+//! crate's reader cannot assert; node instances are counted while the node graph is expanded
+//! ([`MAX_NODE_INSTANCES`]) and vertices are counted before each primitive is read.
 
-use super::{Gathered, Tex, append, check_indices, is_leaf_name};
+use super::{
+    Gathered, MAX_IMPORT_BYTES, MAX_IMPORT_VERTICES, Tex, append, check_indices, is_leaf_name,
+};
 use crate::PlantError;
 use glam::{Mat4, Vec3};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// Most node instances (a node reached through every path of the scene graph counts once per
+/// path) expanded from one file. Checked while expanding, so a small file whose nodes fan out
+/// exponentially is refused before its instances are gathered.
+pub const MAX_NODE_INSTANCES: usize = 65_536;
+
+/// Reads one buffer's bytes: the GLB blob, a `data:` URI (already bounded by the JSON's size), or
+/// a file next to the glTF read through `sylvan_io` within `budget` bytes.
+fn read_buffer(
+    file: &str,
+    buffer: &gltf::Buffer,
+    base: &Path,
+    blob: &mut Option<Vec<u8>>,
+    budget: &mut u64,
+) -> Result<Vec<u8>, PlantError> {
+    let bad = |e: String| {
+        PlantError::file(
+            file,
+            format!("malformed glTF: {e}"),
+            "check the file with a glTF validator or re-export it",
+        )
+    };
+    let mut data = match buffer.source() {
+        gltf::buffer::Source::Bin => blob
+            .take()
+            .ok_or_else(|| bad("the GLB has no binary chunk".into()))?,
+        gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
+            gltf::buffer::Data::from_source(buffer.source(), None)
+                .map_err(|e| bad(e.to_string()))?
+                .0
+        }
+        gltf::buffer::Source::Uri(uri) => {
+            let path = uri_path(base, uri)
+                .ok_or_else(|| bad(format!("buffer uri '{uri}' is not a file path")))?;
+            read_budget(&path, budget).map_err(|e| {
+                PlantError::file(file, format!("buffer '{}': {e}", path.display()), e.fix())
+            })?
+        }
+    };
+    if data.len() < buffer.length() {
+        return Err(bad(format!(
+            "buffer {} holds {} bytes, the file says {}",
+            buffer.index(),
+            data.len(),
+            buffer.length()
+        )));
+    }
+    while data.len() % 4 != 0 {
+        data.push(0);
+    }
+    Ok(data)
+}
+
+/// The file a relative or `file:` URI names, percent-decoded; `None` for other schemes.
+fn uri_path(base: &Path, uri: &str) -> Option<PathBuf> {
+    let rest = uri
+        .strip_prefix("file://")
+        .or_else(|| uri.strip_prefix("file:"));
+    if rest.is_none() && uri.contains(':') {
+        return None;
+    }
+    let raw = rest.unwrap_or(uri).as_bytes();
+    let mut out = Vec::with_capacity(raw.len());
+    let mut i = 0;
+    while i < raw.len() {
+        let hex = |b: u8| (b as char).to_digit(16);
+        match (
+            raw[i],
+            raw.get(i + 1).and_then(|&b| hex(b)),
+            raw.get(i + 2).and_then(|&b| hex(b)),
+        ) {
+            (b'%', Some(h), Some(l)) => {
+                out.push((h * 16 + l) as u8);
+                i += 3;
+            }
+            (b, ..) => {
+                out.push(b);
+                i += 1;
+            }
+        }
+    }
+    Some(base.join(String::from_utf8_lossy(&out).as_ref()))
+}
+
+/// `sylvan_io::read` within what is left of the import budget, which it then lowers.
+fn read_budget(path: &Path, budget: &mut u64) -> Result<Vec<u8>, sylvan_io::ReadError> {
+    let bytes = sylvan_io::read(path, *budget)?;
+    *budget -= bytes.len() as u64;
+    Ok(bytes)
+}
+
+/// Checks every accessor against its buffer view and buffer so that reading it cannot go out of
+/// bounds (the `gltf` crate asserts on a stride smaller than the element).
+fn check_accessors(doc: &gltf::Document, buffers: &[Vec<u8>]) -> Result<(), String> {
+    let view_in_buffer = |v: &gltf::buffer::View| -> Result<(), String> {
+        let len = buffers.get(v.buffer().index()).map_or(0, Vec::len);
+        match v.offset().checked_add(v.length()) {
+            Some(end) if end <= len => Ok(()),
+            _ => Err(format!(
+                "buffer view {} ends past its buffer ({len} bytes)",
+                v.index()
+            )),
+        }
+    };
+    for a in doc.accessors() {
+        let (n, elem) = (a.count(), a.size());
+        if n > MAX_IMPORT_VERTICES * 3 {
+            return Err(format!("accessor {} has {n} elements", a.index()));
+        }
+        if let Some(v) = a.view() {
+            view_in_buffer(&v)?;
+            let stride = v.stride().unwrap_or(elem);
+            if stride < elem {
+                return Err(format!(
+                    "accessor {}: byte stride {stride} is smaller than its element ({elem} bytes)",
+                    a.index()
+                ));
+            }
+            let end = n
+                .checked_sub(1)
+                .map(|last| {
+                    last.checked_mul(stride)
+                        .and_then(|o| o.checked_add(a.offset() + elem))
+                })
+                .unwrap_or(Some(0));
+            if end.is_none_or(|e| e > v.length()) {
+                return Err(format!(
+                    "accessor {} reads past the end of buffer view {}",
+                    a.index(),
+                    v.index()
+                ));
+            }
+        }
+        if let Some(s) = a.sparse() {
+            let k = s.count();
+            let (iv, vv) = (s.indices().view(), s.values().view());
+            view_in_buffer(&iv)?;
+            view_in_buffer(&vv)?;
+            let isize = s.indices().index_type().size();
+            let fits = |off: usize, each: usize, len: usize| {
+                k.checked_mul(each)
+                    .and_then(|b| b.checked_add(off))
+                    .is_some_and(|e| e <= len)
+            };
+            if k > n
+                || !fits(s.indices().offset(), isize, iv.length())
+                || !fits(s.values().offset(), elem, vv.length())
+            {
+                return Err(format!("accessor {}: sparse data out of bounds", a.index()));
+            }
+        }
+    }
+    Ok(())
+}
 
 /// Reads a `.gltf` or `.glb` file into wood and leaves (file units, not yet centred).
 pub(crate) fn load_gltf(path: &Path) -> Result<Gathered, PlantError> {
     let file = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|e| crate::io_error(&file, e))?;
+    let mut budget = MAX_IMPORT_BYTES;
+    let bytes = read_budget(path, &mut budget).map_err(|e| crate::io_error(&file, e))?;
     let bad = |e: String| {
         PlantError::file(
             &file,
@@ -22,9 +186,13 @@ pub(crate) fn load_gltf(path: &Path) -> Result<Gathered, PlantError> {
         .map_err(|_| bad("invalid index in the JSON".into()))?;
     let gltf::Gltf { document, blob } = parsed.map_err(|e| bad(e.to_string()))?;
     let base = path.parent().unwrap_or(Path::new("."));
-    let buffers =
-        gltf::import_buffers(&document, Some(base), blob).map_err(|e| bad(e.to_string()))?;
-    let image_bytes = |img: gltf::Image| -> Option<Vec<u8>> {
+    let mut blob = blob;
+    let buffers = document
+        .buffers()
+        .map(|b| read_buffer(&file, &b, base, &mut blob, &mut budget))
+        .collect::<Result<Vec<_>, _>>()?;
+    check_accessors(&document, &buffers).map_err(bad)?;
+    let mut image_bytes = |img: gltf::Image| -> Option<Vec<u8>> {
         match img.source() {
             gltf::image::Source::View { view, .. } => {
                 let b = buffers.get(view.buffer().index())?;
@@ -32,11 +200,8 @@ pub(crate) fn load_gltf(path: &Path) -> Result<Gathered, PlantError> {
                     .map(<[u8]>::to_vec)
             }
             gltf::image::Source::Uri { uri, .. } => {
-                if uri.starts_with("data:") {
-                    None
-                } else {
-                    std::fs::read(base.join(uri)).ok()
-                }
+                // A missing or oversized texture falls back to the procedural one.
+                read_budget(&uri_path(base, uri)?, &mut budget).ok()
             }
         }
     };
@@ -48,9 +213,18 @@ pub(crate) fn load_gltf(path: &Path) -> Result<Gathered, PlantError> {
         Some(s) => s.nodes().map(|n| (n, Mat4::IDENTITY, 0)).collect(),
         None => document.nodes().map(|n| (n, Mat4::IDENTITY, 0)).collect(),
     };
+    let (mut instances, mut vertices) = (0usize, 0usize);
     while let Some((node, parent, depth)) = stack.pop() {
         if depth > 64 {
             return Err(bad("node tree deeper than 64".into()));
+        }
+        instances += 1;
+        if instances > MAX_NODE_INSTANCES {
+            return Err(PlantError::file(
+                &file,
+                format!("the node graph expands to more than {MAX_NODE_INSTANCES} node instances"),
+                "flatten the scene graph or export fewer instances",
+            ));
         }
         let m = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         for c in node.children() {
@@ -61,16 +235,24 @@ pub(crate) fn load_gltf(path: &Path) -> Result<Gathered, PlantError> {
             if prim.mode() != gltf::mesh::Mode::Triangles {
                 continue;
             }
-            let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+            let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d[..]));
+            let Some(pos_acc) = prim.get(&gltf::Semantic::Positions) else {
+                continue;
+            };
+            vertices += pos_acc.count();
+            if vertices > MAX_IMPORT_VERTICES {
+                return Err(PlantError::file(
+                    &file,
+                    format!("more than {MAX_IMPORT_VERTICES} vertices (counting every instance)"),
+                    "decimate the mesh",
+                ));
+            }
             let Some(pos) = reader.read_positions() else {
                 continue;
             };
             let pos: Vec<[f32; 3]> = pos
                 .map(|p| m.transform_point3(Vec3::from(p)).to_array())
                 .collect();
-            if pos.len() > super::MAX_IMPORT_VERTICES {
-                return Err(bad("too many vertices".into()));
-            }
             let nrm: Option<Vec<[f32; 3]>> = reader.read_normals().map(|it| {
                 it.map(|n| m.transform_vector3(Vec3::from(n)).to_array())
                     .collect()

@@ -21,10 +21,15 @@ use crate::{BaseObject, Instancing, LeafKind, LeafTexture, Mesh, Plant, PlantErr
 use glam::Vec3;
 use std::path::Path;
 
-/// Largest mesh file accepted, bytes.
+/// Most bytes read for one imported mesh: the file plus everything it names (glTF buffers and
+/// textures, OBJ's MTL files and textures), checked while reading.
 pub const MAX_IMPORT_BYTES: u64 = 512 << 20;
-/// Most vertices accepted in an imported mesh.
-pub const MAX_IMPORT_VERTICES: usize = 16_000_000;
+/// Most vertices accepted in an imported mesh (every node instance counted), checked before each
+/// primitive is read; at ~48 bytes a vertex, twice over (plant + instancing view), this keeps
+/// an import under ~0.5 GB.
+pub const MAX_IMPORT_VERTICES: usize = 4_000_000;
+/// Largest texture decoded (width × height), checked from the image header before decoding.
+pub const MAX_TEXTURE_PIXELS: u64 = 4096 * 4096;
 
 pub(crate) use gltf_in::load_gltf;
 pub(crate) use obj_in::load_obj;
@@ -47,8 +52,19 @@ pub(crate) struct Tex {
 }
 
 impl Tex {
+    /// Decodes an image file's bytes; `None` for an undecodable one or one over
+    /// [`MAX_TEXTURE_PIXELS`] (checked from the header, before decoding).
     pub fn decode(bytes: &[u8]) -> Option<Tex> {
-        let img = image::load_from_memory(bytes).ok()?.to_rgba8();
+        let reader = || {
+            image::ImageReader::new(std::io::Cursor::new(bytes))
+                .with_guessed_format()
+                .ok()
+        };
+        let (w, h) = reader()?.into_dimensions().ok()?;
+        if u64::from(w) * u64::from(h) > MAX_TEXTURE_PIXELS {
+            return None;
+        }
+        let img = reader()?.decode().ok()?.to_rgba8();
         let (w, h) = img.dimensions();
         (w > 0 && h > 0).then(|| Tex {
             w,
@@ -152,16 +168,6 @@ pub(crate) fn check_indices(file: &str, idx: &[u32], n: usize) -> Result<(), Pla
 /// Loads a mesh file as a plant.
 pub fn load_mesh(path: &Path, unit_scale: f32) -> Result<Plant, PlantError> {
     let file = path.display().to_string();
-    let len = std::fs::metadata(path)
-        .map_err(|e| crate::io_error(&file, e))?
-        .len();
-    if len > MAX_IMPORT_BYTES {
-        return Err(PlantError::file(
-            &file,
-            format!("file is {len} bytes, more than {MAX_IMPORT_BYTES}"),
-            "decimate the mesh",
-        ));
-    }
     let ext = path
         .extension()
         .and_then(|e| e.to_str())

@@ -2,16 +2,24 @@
 //! decide wood vs leaves. Texture paths are resolved next to the MTL file, and absolute paths
 //! from another machine (`G:\...\bark.png`) fall back to their file name there.
 
-use super::{Gathered, Tex, append, check_indices, is_leaf_name};
+use super::{Gathered, MAX_IMPORT_BYTES, Tex, append, check_indices, is_leaf_name};
 use crate::PlantError;
+use std::cell::Cell;
 use std::path::Path;
 
-fn find_texture(dir: &Path, name: &str) -> Option<Tex> {
+/// `sylvan_io::read` within what is left of the import budget, which it then lowers.
+fn read_budget(path: &Path, budget: &Cell<u64>) -> Result<Vec<u8>, sylvan_io::ReadError> {
+    let bytes = sylvan_io::read(path, budget.get())?;
+    budget.set(budget.get() - bytes.len() as u64);
+    Ok(bytes)
+}
+
+fn find_texture(dir: &Path, name: &str, budget: &Cell<u64>) -> Option<Tex> {
     let name = name.trim();
     let direct = dir.join(name);
-    let bytes = std::fs::read(&direct).ok().or_else(|| {
+    let bytes = read_budget(&direct, budget).ok().or_else(|| {
         let base = name.rsplit(['/', '\\']).next()?;
-        std::fs::read(dir.join(base)).ok()
+        read_budget(&dir.join(base), budget).ok()
     })?;
     Tex::decode(&bytes)
 }
@@ -25,21 +33,44 @@ pub(crate) fn load_obj(path: &Path) -> Result<Gathered, PlantError> {
         ignore_points: true,
         ignore_lines: true,
     };
-    let (models, mats) = tobj::load_obj(path, &opts).map_err(|e| {
+    let budget = Cell::new(MAX_IMPORT_BYTES);
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let obj = read_budget(path, &budget).map_err(|e| crate::io_error(&file, e))?;
+    // MTL files go through the same bounded reader. A missing one is tolerated (default
+    // materials, as before); one that is a device or a FIFO, or too large, stops the import.
+    let mtl_error = std::cell::RefCell::new(None);
+    let load_mtl = |m: &Path| {
+        let p = dir.join(m);
+        match read_budget(&p, &budget) {
+            Ok(b) => tobj::load_mtl_buf(&mut &b[..]),
+            Err(e) if matches!(e.kind(), sylvan_io::ErrorKind::NotFound) => {
+                Err(tobj::LoadError::OpenFileFailed)
+            }
+            Err(e) => {
+                mtl_error.borrow_mut().get_or_insert_with(|| {
+                    PlantError::file(&file, format!("mtllib '{}': {e}", p.display()), e.fix())
+                });
+                Err(tobj::LoadError::OpenFileFailed)
+            }
+        }
+    };
+    let (models, mats) = tobj::load_obj_buf(&mut &obj[..], &opts, load_mtl).map_err(|e| {
         PlantError::file(
             &file,
             format!("malformed OBJ: {e}"),
             "check the file or re-export it as OBJ",
         )
     })?;
+    if let Some(e) = mtl_error.into_inner() {
+        return Err(e);
+    }
     let mats = mats.unwrap_or_default();
-    let dir = path.parent().unwrap_or(Path::new("."));
     let mut textures: Vec<Option<Tex>> = mats
         .iter()
         .map(|m| {
             m.diffuse_texture
                 .as_deref()
-                .and_then(|t| find_texture(dir, t))
+                .and_then(|t| find_texture(dir, t, &budget))
         })
         .collect();
     let mut g = Gathered::default();

@@ -1,0 +1,85 @@
+//! Issue #19's bad inputs: every case under `tests/data/bad/` (plus special files made here at
+//! test time: `/dev/zero` symlinks, FIFOs) fails with exactly one `error:` line naming what is
+//! wrong and a fix, no panic, a non-zero exit — and quickly, without reading gigabytes.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The bad-input corpus, copied into a fresh folder so special files can be added beside it.
+fn corpus(test: &str) -> PathBuf {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/bad");
+    let dir = std::env::temp_dir().join(format!("sylvan-bad-inputs-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    for e in std::fs::read_dir(&src).unwrap() {
+        let e = e.unwrap();
+        std::fs::copy(e.path(), dir.join(e.file_name())).unwrap();
+    }
+    #[cfg(unix)]
+    {
+        for name in ["zero.bin", "zero.lsys", "zero.toml", "zero.csv", "zero.glb"] {
+            std::os::unix::fs::symlink("/dev/zero", dir.join(name)).unwrap();
+        }
+        for name in ["fifo.lsys", "fifo.toml"] {
+            let ok = Command::new("mkfifo").arg(dir.join(name)).status();
+            assert!(ok.is_ok_and(|s| s.success()), "mkfifo");
+        }
+    }
+    dir
+}
+
+/// Runs `sylvan` in `dir`; asserts one `error:` line containing every `want`, no panic, exit ≠ 0.
+fn fails(dir: &Path, args: &[&str], want: &[&str]) {
+    let out = Command::new(env!("CARGO_BIN_EXE_sylvan"))
+        .args(args)
+        .current_dir(dir)
+        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+        .output()
+        .expect("run sylvan");
+    let err = String::from_utf8_lossy(&out.stderr);
+    let case = args.join(" ");
+    assert!(!out.status.success(), "{case}: exit 0\n{err}");
+    assert!(!err.contains("panicked"), "{case}: panic\n{err}");
+    let lines: Vec<&str> = err.lines().filter(|l| l.starts_with("error:")).collect();
+    assert_eq!(lines.len(), 1, "{case}: want one error line\n{err}");
+    for w in want {
+        assert!(lines[0].contains(w), "{case}: want '{w}' in\n{}", lines[0]);
+    }
+    assert!(lines[0].contains(" — "), "{case}: no fix in\n{}", lines[0]);
+}
+
+#[test]
+fn gltf_and_obj_imports() {
+    let d = corpus("import");
+    let plant = |file: &str, want: &[&str]| fails(&d, &["plant", file, "--stats"], want);
+    plant(
+        "gltf_stride_below_element.glb",
+        &["byte stride 4 is smaller than its element (12 bytes)"],
+    );
+    plant(
+        "gltf_node_fanout_2pow26.glb",
+        &["more than 65536 node instances"],
+    );
+    plant(
+        "gltf_buffer_uri_dev_zero.gltf",
+        &["buffer", "zero.bin", "character device"],
+    );
+    plant("gltf_buffer_uri_bad_percent.gltf", &["no such file"]);
+    plant(
+        "obj_mtllib_dev_zero.obj",
+        &["mtllib '/dev/zero'", "character device"],
+    );
+    plant("zero.glb", &["character device"]);
+    plant("zero.lsys", &["character device"]);
+    plant("fifo.lsys", &["FIFO"]);
+}
+
+#[test]
+fn compare_refuses_huge_images_from_the_header() {
+    let d = corpus("compare");
+    fails(
+        &d,
+        &["compare", "png_12000x12000.png", "png_12000x12000.png"],
+        &["12000x12000", "limit"],
+    );
+}
