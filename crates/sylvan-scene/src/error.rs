@@ -119,6 +119,61 @@ impl fmt::Display for SceneError {
 
 impl std::error::Error for SceneError {}
 
+/// Reads the text file `path` (a `what`, e.g. "scene file") through `sylvan_io` within `limit`
+/// bytes. Errors are at `at` (where the file is named) except a non-UTF-8 byte, which is placed
+/// in the file itself.
+pub(crate) fn read_text(
+    path: &Path,
+    limit: u64,
+    at: &Location,
+    what: &str,
+) -> Result<String, SceneError> {
+    sylvan_io::read_to_string(path, limit).map_err(|e| read_error(e, path, at, what))
+}
+
+/// A `sylvan_io` error as a scene error: `at` where the file is named, `what` the file's role.
+pub(crate) fn read_error(
+    e: sylvan_io::ReadError,
+    path: &Path,
+    at: &Location,
+    what: &str,
+) -> SceneError {
+    match e.kind() {
+        sylvan_io::ErrorKind::NotUtf8 { line, col } => SceneError::new(
+            ErrorKind::Io,
+            Location::at(path, *line, *col),
+            format!("the {what} is not UTF-8 text"),
+            e.fix(),
+        ),
+        sylvan_io::ErrorKind::TooLarge { .. } => SceneError::new(
+            ErrorKind::Limit,
+            at.clone(),
+            format!("{what} {}: {e}", path.display()),
+            e.fix(),
+        ),
+        _ => {
+            let text = e.to_string();
+            let why = text.strip_prefix("cannot read: ").unwrap_or(&text);
+            let named = if at.file == path {
+                format!("cannot read {what}: {why}")
+            } else {
+                format!("cannot read {what} {}: {why}", path.display())
+            };
+            SceneError::new(ErrorKind::Io, at.clone(), named, e.fix())
+        }
+    }
+}
+
+/// A number for messages: plain when moderate, scientific when huge or tiny (`1e30`, not a
+/// 31-digit string).
+pub(crate) fn num(v: f32) -> String {
+    if v != 0.0 && !(1e-4..1e7).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
 /// Collapse whitespace runs containing newlines into single spaces.
 fn one_line(s: &str) -> String {
     s.split_whitespace().collect::<Vec<_>>().join(" ")

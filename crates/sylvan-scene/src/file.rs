@@ -42,7 +42,7 @@ struct RawTerrain {
     procedural: Option<Spanned<RawProcedural>>,
     heightmap: Option<Spanned<String>>,
     size_m: Option<Spanned<Size2>>,
-    height_m: Option<Spanned<[f32; 2]>>,
+    height_m: Option<Spanned<Nums<2>>>,
 }
 
 #[derive(Deserialize)]
@@ -56,17 +56,17 @@ struct RawProcedural {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawSun {
-    azimuth_deg: Option<f32>,
+    azimuth_deg: Option<Spanned<f32>>,
     elevation_deg: Option<Spanned<f32>>,
-    color: Option<Spanned<[f32; 3]>>,
+    color: Option<Spanned<Nums<3>>>,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawSky {
-    zenith: Option<Spanned<[f32; 3]>>,
-    horizon: Option<Spanned<[f32; 3]>>,
-    ground: Option<Spanned<[f32; 3]>>,
+    zenith: Option<Spanned<Nums<3>>>,
+    horizon: Option<Spanned<Nums<3>>>,
+    ground: Option<Spanned<Nums<3>>>,
 }
 
 #[derive(Deserialize)]
@@ -78,8 +78,8 @@ struct RawFog {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawCamera {
-    position: Option<Spanned<[f32; 3]>>,
-    look_at: Option<Spanned<[f32; 3]>>,
+    position: Option<Spanned<Nums<3>>>,
+    look_at: Option<Spanned<Nums<3>>>,
     fov_deg: Option<Spanned<f32>>,
 }
 
@@ -107,6 +107,52 @@ struct RawBand {
 struct RawPlacement {
     seed: Option<u64>,
     method: Option<Spanned<String>>,
+}
+
+/// Highest and lowest terrain elevation accepted, metres (Everest and the Mariana Trench are
+/// ~11 km from sea level): heightmap `height_m` ranges and GeoTIFF samples outside are refused.
+pub const MAX_ELEVATION_M: f32 = 20_000.0;
+/// Most `[[species]]` entries in a scene, checked before any plant or placement is built (each
+/// species holds its own plant, ~2 MB for a preset).
+pub const MAX_SPECIES: usize = 64;
+/// Largest linear-RGB component accepted for colours (sun, sky).
+pub const MAX_COLOR: f32 = 1_000.0;
+
+/// Exactly `N` numbers (`[a, b]`, `[r, g, b]`): a longer or shorter array is a syntax error at
+/// the array (serde's fixed-size arrays would silently ignore extra elements).
+#[derive(Clone, Copy)]
+pub(crate) struct Nums<const N: usize>(pub [f32; N]);
+
+impl<'de, const N: usize> Deserialize<'de> for Nums<N> {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V<const N: usize>;
+        impl<'de, const N: usize> serde::de::Visitor<'de> for V<N> {
+            type Value = Nums<N>;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                write!(f, "an array of exactly {N} numbers")
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut s: A,
+            ) -> Result<Nums<N>, A::Error> {
+                let mut out = [0.0; N];
+                for (i, slot) in out.iter_mut().enumerate() {
+                    *slot = s
+                        .next_element()?
+                        .ok_or_else(|| serde::de::Error::invalid_length(i, &self))?;
+                }
+                let mut extra = N;
+                while s.next_element::<toml::Value>()?.is_some() {
+                    extra += 1;
+                }
+                if extra > N {
+                    return Err(serde::de::Error::invalid_length(extra, &self));
+                }
+                Ok(Nums(out))
+            }
+        }
+        d.deserialize_seq(V::<N>)
+    }
 }
 
 /// An extent: one number (square) or `[x, z]`.
@@ -224,6 +270,22 @@ pub(crate) fn toml_error(e: &toml::de::Error, text: &str, path: &Path) -> SceneE
 pub(crate) fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
     let raw: RawScene = toml::from_str(text).map_err(|e| toml_error(&e, text, path))?;
     let cx = Ctx { text, path };
+    if raw.species.len() > MAX_SPECIES {
+        // Point at the first entry past the limit.
+        let at = text
+            .match_indices("[[species]]")
+            .nth(MAX_SPECIES)
+            .map_or(0, |(i, _)| i);
+        return Err(SceneError::new(
+            ErrorKind::Limit,
+            cx.loc(&(at..at)),
+            format!(
+                "{} [[species]] entries, more than the limit of {MAX_SPECIES}",
+                raw.species.len()
+            ),
+            "merge species that share a plant (use a positions CSV or density_map per stand)",
+        ));
+    }
     let terrain = build_terrain(&cx, raw.terrain)?;
     let placement = build_placement(&cx, raw.placement)?;
     let mut species = Vec::with_capacity(raw.species.len());
@@ -433,12 +495,15 @@ fn build_terrain(cx: &Ctx, raw: Option<Spanned<RawTerrain>>) -> Result<Terrain, 
             let height_m = match &t.height_m {
                 None => None,
                 Some(r) => {
-                    let [lo, hi] = *r.get_ref();
-                    if !(lo.is_finite() && hi.is_finite()) || lo > hi {
+                    let [lo, hi] = r.get_ref().0;
+                    let ok = |v: f32| v.is_finite() && v.abs() <= MAX_ELEVATION_M;
+                    if !(ok(lo) && ok(hi)) || lo > hi {
                         return Err(cx.invalid(
                             &r.span(),
-                            format!("height_m = [{lo}, {hi}] is not a valid range"),
-                            "write [min, max] in metres with min ≤ max",
+                            format!("height_m = [{}, {}] is not a valid range", crate::error::num(lo), crate::error::num(hi)),
+                            format!(
+                                "write [min, max] in metres with min ≤ max, both within ±{MAX_ELEVATION_M}"
+                            ),
                         ));
                     }
                     Some([lo, hi])
@@ -479,17 +544,19 @@ fn build_placement(cx: &Ctx, raw: Option<RawPlacement>) -> Result<Placement, Sce
 
 fn colour(
     cx: &Ctx,
-    c: Option<Spanned<[f32; 3]>>,
+    c: Option<Spanned<Nums<3>>>,
     default: [f32; 3],
     key: &str,
 ) -> Result<[f32; 3], SceneError> {
     let Some(c) = c else { return Ok(default) };
-    let v = *c.get_ref();
-    if v.iter().any(|x| !x.is_finite() || *x < 0.0) {
+    let v = c.get_ref().0;
+    if v.iter()
+        .any(|x| !x.is_finite() || !(0.0..=MAX_COLOR).contains(x))
+    {
         return Err(cx.invalid(
             &c.span(),
-            format!("{key} has a negative or non-finite component"),
-            "give linear RGB values ≥ 0",
+            format!("{key} has a component out of range or not a number"),
+            format!("give linear RGB values in [0, {MAX_COLOR}]"),
         ));
     }
     Ok(v)
@@ -498,7 +565,17 @@ fn colour(
 fn build_sun(cx: &Ctx, raw: Option<RawSun>) -> Result<Sun, SceneError> {
     let mut sun = Sun::default();
     let Some(raw) = raw else { return Ok(sun) };
-    sun.azimuth_deg = raw.azimuth_deg.unwrap_or(sun.azimuth_deg);
+    if let Some(a) = raw.azimuth_deg {
+        let v = *a.get_ref();
+        if !(v.is_finite() && (-360.0..=360.0).contains(&v)) {
+            return Err(cx.invalid(
+                &a.span(),
+                format!("azimuth_deg = {v} is out of range"),
+                "give degrees in [-360, 360] (clockwise from north)",
+            ));
+        }
+        sun.azimuth_deg = v;
+    }
     if let Some(e) = raw.elevation_deg {
         let v = *e.get_ref();
         if !(-90.0..=90.0).contains(&v) {
@@ -548,11 +625,11 @@ fn build_camera(cx: &Ctx, raw: Option<RawCamera>, terrain: &Terrain) -> Result<C
         (&raw.look_at, &mut cam.look_at),
     ] {
         if let Some(v) = v {
-            let p = Vec3::from(*v.get_ref());
-            if !p.is_finite() {
+            let p = Vec3::from(v.get_ref().0);
+            if !p.is_finite() || p.abs().max_element() > 1e7 {
                 return Err(cx.invalid(
                     &v.span(),
-                    "camera coordinates must be finite",
+                    "camera coordinates must be finite and within 10,000 km",
                     "give [x, y, z] in metres",
                 ));
             }
@@ -585,17 +662,14 @@ fn build_camera(cx: &Ctx, raw: Option<RawCamera>, terrain: &Terrain) -> Result<C
     Ok(cam)
 }
 
+/// Largest scene file read, bytes.
+pub const MAX_SCENE_BYTES: u64 = 4 << 20;
+
 impl Scene {
     /// Load a scene file (TOML, see DESIGN.md "Scene file").
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            SceneError::new(
-                ErrorKind::Io,
-                Location::file(path),
-                format!("cannot read scene file ({e})"),
-                "check the path",
-            )
-        })?;
+        let text =
+            crate::error::read_text(path, MAX_SCENE_BYTES, &Location::file(path), "scene file")?;
         Scene::parse(&text, path)
     }
 

@@ -3,12 +3,15 @@
 //! Dimensions are checked against [`MAX_IMAGE_DIM`] and [`MAX_TERRAIN_SAMPLES`] from the header,
 //! before any pixel buffer is allocated.
 
-use crate::error::{ErrorKind, Location, SceneError};
+use crate::error::{ErrorKind, Location, SceneError, read_error};
+use crate::file::MAX_ELEVATION_M;
 use crate::terrain::MAX_TERRAIN_SAMPLES;
 use crate::types::Terrain;
-use std::fs::File;
-use std::io::{BufReader, Read};
+use std::io::Cursor;
 use std::path::Path;
+
+/// Largest heightmap or density-map file read, bytes (checked while reading).
+pub const MAX_RASTER_BYTES: u64 = 512 << 20;
 
 /// Largest width or height of a heightmap or density map, pixels.
 pub const MAX_IMAGE_DIM: u32 = 16_384;
@@ -57,14 +60,22 @@ pub(crate) fn read_gray(
     purpose: Purpose,
     at: &Location,
 ) -> Result<Raster, SceneError> {
-    let io_err = |e: std::io::Error| {
-        SceneError::new(
-            ErrorKind::Io,
-            at.clone(),
-            format!("cannot read {} ({e})", path.display()),
-            "check the path (relative paths resolve against the scene file's folder)",
-        )
+    let role = match purpose {
+        Purpose::Heightmap => "heightmap",
+        Purpose::DensityMap => "density map",
     };
+    let bytes =
+        sylvan_io::read(path, MAX_RASTER_BYTES).map_err(|e| read_error(e, path, at, role))?;
+    decode_gray(&bytes, path, purpose, at)
+}
+
+/// Decode a grayscale raster from `bytes` (the contents of `path`); see [`read_gray`].
+pub(crate) fn decode_gray(
+    bytes: &[u8],
+    path: &Path,
+    purpose: Purpose,
+    at: &Location,
+) -> Result<Raster, SceneError> {
     let not_image = |why: String| {
         SceneError::new(
             ErrorKind::Image,
@@ -73,32 +84,18 @@ pub(crate) fn read_gray(
             purpose.fix(),
         )
     };
-    let mut magic = [0u8; 8];
-    let mut file = File::open(path).map_err(io_err)?;
-    let n = read_up_to(&mut file, &mut magic).map_err(io_err)?;
-    let magic = &magic[..n];
+    let magic = &bytes[..bytes.len().min(8)];
     let raster = if magic.starts_with(b"\x89PNG") {
-        read_png(path, &not_image, at)?
+        read_png(bytes, path, &not_image, at)?
     } else if magic.starts_with(b"II*\0") || magic.starts_with(b"MM\0*") {
         if purpose == Purpose::DensityMap {
             return Err(not_image("a TIFF; density maps are PNG".into()));
         }
-        read_tiff(path, &not_image, at)?
+        read_tiff(bytes, path, &not_image, at)?
     } else {
         return Err(not_image("neither PNG nor TIFF signature".into()));
     };
     Ok(raster)
-}
-
-fn read_up_to(file: &mut File, buf: &mut [u8]) -> std::io::Result<usize> {
-    let mut n = 0;
-    while n < buf.len() {
-        match file.read(&mut buf[n..])? {
-            0 => break,
-            k => n += k,
-        }
-    }
-    Ok(n)
 }
 
 fn check_dims(w: u32, h: u32, at: &Location, path: &Path) -> Result<(), SceneError> {
@@ -123,13 +120,13 @@ fn check_dims(w: u32, h: u32, at: &Location, path: &Path) -> Result<(), SceneErr
 }
 
 fn read_png(
+    bytes: &[u8],
     path: &Path,
     not_image: &dyn Fn(String) -> SceneError,
     at: &Location,
 ) -> Result<Raster, SceneError> {
     use image::{DynamicImage, ImageDecoder};
-    let file = File::open(path).map_err(|e| not_image(e.to_string()))?;
-    let decoder = image::codecs::png::PngDecoder::new(BufReader::new(file))
+    let decoder = image::codecs::png::PngDecoder::new(Cursor::new(bytes))
         .map_err(|e| not_image(e.to_string()))?;
     let (w, h) = decoder.dimensions();
     check_dims(w, h, at, path)?;
@@ -163,13 +160,13 @@ fn read_png(
 }
 
 fn read_tiff(
+    bytes: &[u8],
     path: &Path,
     not_image: &dyn Fn(String) -> SceneError,
     at: &Location,
 ) -> Result<Raster, SceneError> {
     use tiff::decoder::{Decoder, DecodingResult};
-    let file = File::open(path).map_err(|e| not_image(e.to_string()))?;
-    let mut dec = Decoder::new(BufReader::new(file)).map_err(|e| not_image(e.to_string()))?;
+    let mut dec = Decoder::new(Cursor::new(bytes)).map_err(|e| not_image(e.to_string()))?;
     let (w, h) = dec.dimensions().map_err(|e| not_image(e.to_string()))?;
     check_dims(w, h, at, path)?;
     match dec.colortype().map_err(|e| not_image(e.to_string()))? {
@@ -203,6 +200,22 @@ fn read_tiff(
             .fold(f32::INFINITY, f32::min);
         if !lowest.is_finite() {
             return Err(not_image("no valid height samples".into()));
+        }
+        if let Some(i) = values
+            .iter()
+            .position(|&v| !invalid(v) && v.abs() > MAX_ELEVATION_M)
+        {
+            return Err(SceneError::new(
+                ErrorKind::InvalidValue,
+                Location::file(path),
+                format!(
+                    "sample at column {}, row {} is {} m, beyond ±{MAX_ELEVATION_M} m",
+                    i % w as usize,
+                    i / w as usize,
+                    crate::error::num(values[i])
+                ),
+                "mark missing data with the GDAL nodata tag, or convert the samples to metres",
+            ));
         }
         for v in &mut values {
             if invalid(*v) {

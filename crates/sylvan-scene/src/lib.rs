@@ -24,7 +24,9 @@ mod types;
 pub use csv::{MAX_CSV_BYTES, MAX_CSV_ROWS};
 pub use default::{BUILTIN_SIZE_M, DEFAULT_SUN_COLOR, preset_height_m};
 pub use error::{ErrorKind, Location, SceneError, line_col};
+pub use file::{MAX_COLOR, MAX_ELEVATION_M, MAX_SCENE_BYTES, MAX_SPECIES};
 pub use heightmap::MAX_IMAGE_DIM;
+pub use heightmap::MAX_RASTER_BYTES;
 pub use params::{LodBand, Origin, ParamValue, Setting};
 pub use path::{CameraKey, CameraPath, Interpolation};
 pub use placement::{
@@ -32,8 +34,41 @@ pub use placement::{
     Placed, Placement, PlacementError, PlacementMethod, SpeciesLayout, estimate_trees, peak_per_ha,
     place_trees, poisson_disk, poisson_tile,
 };
+pub use species::{MAX_TREE_HEIGHT_M, PRESETS};
 pub use terrain::{
     MAX_PROCEDURAL_RESOLUTION, MAX_TERRAIN_SAMPLES, MAX_TERRAIN_SIZE_M, PROCEDURAL_SPACING_M,
     ProceduralTerrain,
 };
 pub use types::*;
+
+/// Entry points for the fuzz targets (`fuzz/`) and their stable-Rust corpus test: each parses
+/// untrusted bytes the way a scene load does and must return, never panic.
+#[doc(hidden)]
+pub mod fuzzing {
+    use crate::error::Location;
+    use std::path::Path;
+
+    /// A positions CSV on a 1 km flat terrain.
+    pub fn positions_csv(text: &str) {
+        let t = crate::Terrain::flat([1000.0, 1000.0], 0.0);
+        let at = Location::file(Path::new("fuzz.toml"));
+        let _ =
+            crate::csv::parse_positions(text, Path::new("fuzz.csv"), &at, &t, 0, [5.0, 10.0], 1);
+    }
+
+    /// A heightmap file's bytes (PNG or GeoTIFF), made into a 100 m terrain.
+    pub fn heightmap(bytes: &[u8]) {
+        let p = Path::new("fuzz.tif");
+        let at = Location::file(p);
+        if let Ok(r) =
+            crate::heightmap::decode_gray(bytes, p, crate::heightmap::Purpose::Heightmap, &at)
+        {
+            let _ = r.into_terrain([100.0, 100.0], Some([0.0, 50.0]));
+        }
+    }
+
+    /// A scene file's text (files it names resolve against a folder that does not exist).
+    pub fn scene(text: &str) {
+        let _ = crate::Scene::parse(text, Path::new("/nonexistent/fuzz.toml"));
+    }
+}

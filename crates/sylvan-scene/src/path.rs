@@ -77,14 +77,12 @@ fn default_fov() -> f32 {
 impl CameraPath {
     /// Read a camera path file.
     pub fn load(path: &Path) -> Result<Self, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            SceneError::new(
-                ErrorKind::Io,
-                Location::file(path),
-                format!("cannot read camera path ({e})"),
-                "check the path",
-            )
-        })?;
+        let text = crate::error::read_text(
+            path,
+            crate::file::MAX_SCENE_BYTES,
+            &Location::file(path),
+            "camera path",
+        )?;
         Self::parse(&text, path)
     }
 

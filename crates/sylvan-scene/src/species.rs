@@ -13,6 +13,14 @@ use crate::types::{PlantSource, Species, Terrain, TreeInstance};
 use serde::Deserialize;
 use toml::Spanned;
 
+/// The plant presets `sylvan-plant` builds (its `preset_source`), checked when the scene is read
+/// so an unknown one names its scene line.
+pub const PRESETS: [&str; 3] = ["pine", "prunus", "bush"];
+
+/// Tallest tree accepted, metres (the tallest living tree is ~116 m): species `height_m` and a
+/// positions CSV's `height` column are checked against it.
+pub const MAX_TREE_HEIGHT_M: f32 = 150.0;
+
 /// A `[[species]]` table as written.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -20,7 +28,7 @@ pub(crate) struct RawSpecies {
     name: Option<String>,
     plant: Option<Spanned<String>>,
     preset: Option<Spanned<String>>,
-    height_m: Option<Spanned<[f32; 2]>>,
+    height_m: Option<Spanned<crate::file::Nums<2>>>,
     density_per_ha: Option<Spanned<f32>>,
     density_map: Option<Spanned<String>>,
     positions: Option<Spanned<String>>,
@@ -54,7 +62,17 @@ pub(crate) fn build_species(
             ));
         }
         (Some(p), None) => PlantSource::File(cx.resolve(cx.non_empty(p, "plant")?)),
-        (None, Some(p)) => PlantSource::Preset(cx.non_empty(p, "preset")?.to_string()),
+        (None, Some(p)) => {
+            let name = cx.non_empty(p, "preset")?;
+            if !PRESETS.contains(&name) {
+                return Err(cx.invalid(
+                    &p.span(),
+                    format!("unknown plant preset `{name}`"),
+                    format!("use one of: {}", PRESETS.join(", ")),
+                ));
+            }
+            PlantSource::Preset(name.to_string())
+        }
         (None, None) => {
             return Err(cx.invalid(
                 &span,
@@ -76,12 +94,17 @@ pub(crate) fn build_species(
     let height_m = match &s.height_m {
         None => preset_height_m(&plant),
         Some(h) => {
-            let [lo, hi] = *h.get_ref();
-            if !(lo.is_finite() && hi.is_finite()) || lo <= 0.0 || lo > hi {
+            let [lo, hi] = h.get_ref().0;
+            if !(lo.is_finite() && hi.is_finite()) || lo <= 0.0 || lo > hi || hi > MAX_TREE_HEIGHT_M
+            {
                 return Err(cx.invalid(
                     &h.span(),
-                    format!("height_m = [{lo}, {hi}] is not a valid range"),
-                    "write [min, max] in metres with 0 < min ≤ max",
+                    format!(
+                        "height_m = [{}, {}] is not a valid range",
+                        crate::error::num(lo),
+                        crate::error::num(hi)
+                    ),
+                    format!("write [min, max] in metres with 0 < min ≤ max ≤ {MAX_TREE_HEIGHT_M}"),
                 ));
             }
             [lo, hi]

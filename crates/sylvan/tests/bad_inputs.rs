@@ -75,6 +75,78 @@ fn gltf_and_obj_imports() {
 }
 
 #[test]
+fn scene_values_and_files() {
+    let d = corpus("scene");
+    let render = |file: &str, want: &[&str]| {
+        fails(
+            &d,
+            &["render", file, "--out", "out.png", "--size", "8x8"],
+            want,
+        )
+    };
+    render(
+        "scene_azimuth_nan.toml",
+        &["scene_azimuth_nan.toml:2:15: azimuth_deg = NaN"],
+    );
+    render(
+        "scene_height_m_three_numbers.toml",
+        &[":3:12:", "exactly 2 numbers"],
+    );
+    render(
+        "scene_heightmap_range_3e38.toml",
+        &[":4:12: height_m = [-3e38, 3e38]"],
+    );
+    render(
+        "scene_tree_height_1e30.toml",
+        &[":3:12: height_m = [1, 1e30]", "≤ 150"],
+    );
+    render(
+        "scene_csv_height_1e30.toml",
+        &["csv_height_1e30.csv:2:13: height 1e30 m"],
+    );
+    render(
+        "scene_geotiff_3e38.toml",
+        &["dem_samples_3e38.tif: sample at column 1, row 0 is 3e38 m"],
+    );
+    render(
+        "scene_preset_oak.toml",
+        &["scene_preset_oak.toml:2:10: unknown plant preset `oak`"],
+    );
+    render(
+        "scene_not_utf8.toml",
+        &[
+            "scene_not_utf8.toml:2:22: ",
+            "not UTF-8",
+            "save the file as UTF-8",
+        ],
+    );
+    render(
+        "scene_csv_dev_zero.toml",
+        &[
+            ":6:13: cannot read positions CSV zero.csv",
+            "character device",
+        ],
+    );
+    render("zero.toml", &["character device"]);
+    render("fifo.toml", &["FIFO"]);
+    let many: String = (0..2000)
+        .map(|_| "[[species]]\npreset = \"bush\"\ndensity_per_ha = 1\n")
+        .collect();
+    std::fs::write(d.join("species_2000.toml"), many).unwrap();
+    render(
+        "species_2000.toml",
+        &["species_2000.toml:193:1: 2000 [[species]] entries, more than the limit of 64"],
+    );
+}
+
+#[test]
+fn scene_presets_are_the_plant_presets() {
+    for name in sylvan_scene::PRESETS {
+        assert!(sylvan_plant::preset_source(name).is_some(), "{name}");
+    }
+}
+
+#[test]
 fn compare_refuses_huge_images_from_the_header() {
     let d = corpus("compare");
     fails(
