@@ -22,6 +22,13 @@ use super::codec::{Decoder, Encoder, fnv64};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+/// Largest cache file read, bytes (through `sylvan_io`, checked while reading): a FIFO, a
+/// device or an oversized file in the cache folder reads as stale, never hangs or fills memory.
+pub const MAX_CACHE_FILE_BYTES: u64 = 1 << 30;
+/// Hidden temporary files older than this in the cache folder are left from a killed bake and
+/// are removed by the next write.
+pub const STALE_TEMP_AGE: std::time::Duration = std::time::Duration::from_secs(3600);
+
 /// Bumped when the container layout above changes.
 pub const CONTAINER_VERSION: u32 = 1;
 const MAGIC: &[u8; 8] = b"SYLVBAKE";
@@ -155,13 +162,38 @@ pub fn decode(bytes: &[u8], key: &CacheKey) -> Result<Vec<u8>, String> {
 
 /// Reads `path` and checks it against `key`.
 pub fn read(path: &Path, key: &CacheKey) -> Lookup {
-    match std::fs::read(path) {
+    match sylvan_io::read(path, MAX_CACHE_FILE_BYTES) {
         Ok(bytes) => match decode(&bytes, key) {
             Ok(p) => Lookup::Hit(p),
             Err(why) => Lookup::Stale(why),
         },
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Lookup::Miss,
-        Err(e) => Lookup::Stale(format!("cannot read: {e}")),
+        Err(e) if matches!(e.kind(), sylvan_io::ErrorKind::NotFound) => Lookup::Miss,
+        Err(e) => Lookup::Stale(e.to_string()),
+    }
+}
+
+/// Removes hidden `.*.tmp` files in `dir` older than `max_age` (left by a bake killed between
+/// creating its temp file and renaming it). Best effort: errors are ignored.
+pub fn sweep_stale_temps(dir: &Path, max_age: std::time::Duration) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let name = e.file_name();
+        let name = name.to_string_lossy();
+        if !(name.starts_with('.') && name.ends_with(".tmp")) {
+            continue;
+        }
+        let old = e
+            .metadata()
+            .ok()
+            .filter(|m| m.is_file())
+            .and_then(|m| m.modified().ok())
+            .and_then(|t| t.elapsed().ok())
+            .is_some_and(|age| age > max_age);
+        if old {
+            let _ = std::fs::remove_file(e.path());
+        }
     }
 }
 
@@ -172,6 +204,7 @@ pub fn write(path: &Path, key: &CacheKey, payload: &[u8]) -> std::io::Result<()>
         .filter(|p| !p.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
     std::fs::create_dir_all(dir)?;
+    sweep_stale_temps(dir, STALE_TEMP_AGE);
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -200,6 +233,47 @@ mod tests {
             format_version: 3,
             hash: 0x1234,
         }
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn fifos_and_devices_in_the_cache_read_as_stale_without_blocking() {
+        let dir = std::env::temp_dir().join(format!("sylvan-cache-special-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let zero = dir.join("zero.sylbake");
+        std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+        assert!(matches!(read(&zero, &key()), Lookup::Stale(w) if w.contains("character device")));
+        let fifo = dir.join("fifo.sylbake");
+        if std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .is_ok_and(|s| s.success())
+        {
+            assert!(matches!(read(&fifo, &key()), Lookup::Stale(w) if w.contains("FIFO")));
+            // A re-bake replaces the FIFO with a regular file.
+            write(&fifo, &key(), b"p").unwrap();
+            assert!(matches!(read(&fifo, &key()), Lookup::Hit(p) if p == b"p"));
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn stale_temp_files_are_swept_fresh_ones_kept() {
+        let dir = std::env::temp_dir().join(format!("sylvan-cache-sweep-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let old = dir.join(".a.sylbake.1.tmp");
+        std::fs::write(&old, b"x").unwrap();
+        let f = std::fs::File::options().write(true).open(&old).unwrap();
+        f.set_modified(std::time::SystemTime::now() - 2 * STALE_TEMP_AGE)
+            .unwrap();
+        drop(f);
+        let fresh = dir.join(".b.sylbake.2.tmp");
+        std::fs::write(&fresh, b"x").unwrap();
+        write(&dir.join("c.sylbake"), &key(), b"p").unwrap();
+        assert!(!old.exists() && fresh.exists());
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]
