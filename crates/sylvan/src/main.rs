@@ -37,14 +37,38 @@ enum Command {
     Adapter,
 }
 
+/// clap's error (several lines: the error, a tip, usage, a pointer to --help) as one line: its
+/// first line, plus where to look — `sylvan CMD --help` for the subcommand given.
+fn clap_one_line(e: &clap::Error) -> String {
+    let text = e.render().to_string();
+    let first = text
+        .lines()
+        .find(|l| !l.trim().is_empty())
+        .unwrap_or("invalid arguments");
+    let what = first.strip_prefix("error: ").unwrap_or(first).trim();
+    let sub = std::env::args().nth(1).filter(|a| {
+        <Cli as clap::CommandFactory>::command()
+            .find_subcommand(a)
+            .is_some()
+    });
+    let help = match sub {
+        Some(s) => format!("sylvan {s} --help"),
+        None => "sylvan --help".into(),
+    };
+    format!("{what} — see `{help}`")
+}
+
 fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
-        Err(e) => {
+        Err(e) if !e.use_stderr() => {
             // --help / --version are not errors.
-            let code = if e.use_stderr() { 2 } else { 0 };
             let _ = e.print();
-            return ExitCode::from(code);
+            return ExitCode::SUCCESS;
+        }
+        Err(e) => {
+            eprintln!("error: {}", clap_one_line(&e));
+            return ExitCode::from(2);
         }
     };
     let result = match cli.command {

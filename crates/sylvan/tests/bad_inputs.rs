@@ -155,3 +155,26 @@ fn compare_refuses_huge_images_from_the_header() {
         &["12000x12000", "limit"],
     );
 }
+
+#[test]
+fn clap_errors_are_one_line_with_where_to_look() {
+    let d = corpus("clap");
+    fails(
+        &d,
+        &["render", "--size"],
+        &[
+            "a value is required for '--size",
+            "see `sylvan render --help`",
+        ],
+    );
+    fails(
+        &d,
+        &["render", "--spp", "-1"],
+        &["'-1'", "see `sylvan render --help`"],
+    );
+    fails(
+        &d,
+        &["frobnicate"],
+        &["unrecognized subcommand", "see `sylvan --help`"],
+    );
+}
