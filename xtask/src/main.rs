@@ -1,11 +1,15 @@
 //! `cargo xtask demo` and `cargo xtask test`: the README's two commands.
 //!
-//! Both first make sure a GPU adapter exists. When none does, they install Mesa's software
-//! Vulkan driver (lavapipe: `mesa-vulkan-drivers libvulkan1`, with the GL fallback
-//! `libegl1 libegl-mesa0 libgl1-mesa-dri`) with apt-get, saying so, and then run.
+//! Both first make sure a GPU adapter exists. When there is no Vulkan adapter — none at all, or
+//! only Mesa's GL driver, which a fresh Debian image may ship alone — they install Mesa's
+//! software Vulkan driver (lavapipe: `mesa-vulkan-drivers libvulkan1`, and the GL driver
+//! `libegl1 libegl-mesa0 libgl1-mesa-dri`) with apt-get, saying so, and then run (Sylvan works
+//! on GL too, and `demo` goes on with GL when the install is not possible).
 //!
 //! - `demo`: renders the built-in forest to `out/demo.png` and prints frame stats.
-//! - `test`: `cargo fmt --check`, `cargo clippy -D warnings`, then the whole test suite. The
+//! - `test`: `cargo fmt --check`, `cargo clippy -D warnings`, then the whole test suite, then the
+//!   render tests (`sylvan-render`) a second time on the GL backend (`WGPU_BACKEND=gl`), so
+//!   every backend Sylvan claims is tested; both drivers are installed when missing. The
 //!   viewer's tests (`crates/sylvan/tests/view_cli.rs`) open windows on their own `Xvfb`: when
 //!   `Xvfb` is missing, `test` installs `xvfb` with apt-get first.
 
@@ -87,14 +91,17 @@ fn build_cli(release: bool) -> Result<PathBuf, String> {
     Ok(target.join(profile).join("sylvan"))
 }
 
-/// Whether `sylvan adapter` finds a GPU adapter; prints its line.
-fn adapter_found(cli: &Path) -> bool {
+/// The adapter `sylvan adapter` finds on `backend` (`vulkan`, `gl`), its line printed.
+fn adapter_on(cli: &Path, backend: &str) -> bool {
     let mut c = Command::new(cli);
-    c.arg("adapter");
+    c.arg("adapter").env("WGPU_BACKEND", backend);
     quiet_driver_noise(&mut c);
     match c.output() {
         Ok(out) if out.status.success() => {
-            eprint!("xtask: adapter: {}", String::from_utf8_lossy(&out.stdout));
+            eprint!(
+                "xtask: {backend} adapter: {}",
+                String::from_utf8_lossy(&out.stdout)
+            );
             true
         }
         _ => false,
@@ -118,28 +125,61 @@ fn apt_get(args: &[&str]) -> Result<(), String> {
     run(c, &format!("apt-get {}", args.join(" ")))
 }
 
-/// Makes sure an adapter exists, installing Mesa's software drivers when none does.
-fn ensure_adapter(cli: &Path) -> Result<(), String> {
-    if adapter_found(cli) {
-        return Ok(());
-    }
-    eprintln!(
-        "xtask: no GPU adapter found — installing Mesa's software Vulkan driver (lavapipe) and the GL fallback with apt-get: {} {}",
-        VULKAN_PACKAGES.join(" "),
-        GL_PACKAGES.join(" ")
-    );
-    let mut install = vec!["install", "-y", "--no-install-recommends"];
-    install.extend(VULKAN_PACKAGES);
-    install.extend(GL_PACKAGES);
-    if apt_get(&install).is_err() {
+fn install(packages: &[&str]) -> Result<(), String> {
+    let mut args = vec!["install", "-y", "--no-install-recommends"];
+    args.extend(packages);
+    if apt_get(&args).is_err() {
         apt_get(&["update"])?;
-        apt_get(&install)?;
+        apt_get(&args)?;
     }
-    if adapter_found(cli) {
-        Ok(())
-    } else {
-        Err("still no GPU adapter after installing Mesa's drivers — check `vulkaninfo --summary`, or try WGPU_BACKEND=gl".into())
+    Ok(())
+}
+
+/// Makes sure a Vulkan adapter exists (and, with `gl_too`, a GL one), installing Mesa's
+/// software drivers when not. Without `gl_too`, a GL adapter alone is enough when the
+/// install fails (the demo runs on GL).
+fn ensure_adapter(cli: &Path, gl_too: bool) -> Result<(), String> {
+    let vulkan = adapter_on(cli, "vulkan");
+    let gl = adapter_on(cli, "gl");
+    if !vulkan {
+        let why = if gl {
+            "only a GL adapter found"
+        } else {
+            "no GPU adapter found"
+        };
+        eprintln!(
+            "xtask: {why} — installing Mesa's software Vulkan driver (lavapipe), which Sylvan prefers, and the GL driver with apt-get: {} {}",
+            VULKAN_PACKAGES.join(" "),
+            GL_PACKAGES.join(" ")
+        );
+        let packages: Vec<&str> = VULKAN_PACKAGES.iter().chain(GL_PACKAGES).copied().collect();
+        match install(&packages) {
+            Ok(()) if adapter_on(cli, "vulkan") => {}
+            result if gl && !gl_too => {
+                let e = result
+                    .err()
+                    .unwrap_or_else(|| "no Vulkan adapter after it".into());
+                eprintln!("xtask: could not install lavapipe ({e}) — going on with the GL adapter");
+                return Ok(());
+            }
+            _ => {
+                return Err("still no Vulkan adapter after installing Mesa's drivers — check `vulkaninfo --summary`, or try WGPU_BACKEND=gl".into());
+            }
+        }
     }
+    if gl_too && !adapter_on(cli, "gl") {
+        eprintln!(
+            "xtask: no GL adapter found — installing Mesa's GL driver for the GL test pass with apt-get: {}",
+            GL_PACKAGES.join(" ")
+        );
+        install(GL_PACKAGES)?;
+        if !adapter_on(cli, "gl") {
+            return Err(
+                "still no GL adapter after installing Mesa's GL driver — check `eglinfo`".into(),
+            );
+        }
+    }
+    Ok(())
 }
 
 /// Makes sure `Xvfb` exists for the viewer tests, installing `xvfb` with apt-get when not.
@@ -159,12 +199,7 @@ fn ensure_xvfb() -> Result<(), String> {
         "xtask: Xvfb not found — installing the virtual X server for the viewer tests with apt-get: {}",
         XVFB_PACKAGES.join(" ")
     );
-    let mut install = vec!["install", "-y", "--no-install-recommends"];
-    install.extend(XVFB_PACKAGES);
-    if apt_get(&install).is_err() {
-        apt_get(&["update"])?;
-        apt_get(&install)?;
-    }
+    install(XVFB_PACKAGES)?;
     if found() {
         Ok(())
     } else {
@@ -177,7 +212,7 @@ fn ensure_xvfb() -> Result<(), String> {
 
 fn demo() -> Result<(), String> {
     let cli = build_cli(true)?;
-    ensure_adapter(&cli)?;
+    ensure_adapter(&cli, false)?;
     let out = root().join("out");
     std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
     let png = out.join("demo.png");
@@ -216,9 +251,20 @@ fn test() -> Result<(), String> {
         "cargo clippy --workspace --all-targets -- -D warnings",
     )?;
     let cli = build_cli(false)?;
-    ensure_adapter(&cli)?;
+    ensure_adapter(&cli, true)?;
     ensure_xvfb()?;
     let mut tests = cargo();
     tests.args(["test", "--workspace"]);
-    run(tests, "cargo test --workspace")
+    run(tests, "cargo test --workspace")?;
+    // The render tests again on the GL backend (the cross-backend test already ran both).
+    let mut gl = cargo();
+    gl.env("WGPU_BACKEND", "gl").args([
+        "test",
+        "--package",
+        "sylvan-render",
+        "--",
+        "--skip",
+        "gl_bakes_and_draws_as_vulkan_does",
+    ]);
+    run(gl, "WGPU_BACKEND=gl cargo test --package sylvan-render")
 }

@@ -64,7 +64,20 @@ pub struct Gpu {
 impl Gpu {
     /// Opens a device on the best adapter available (`WGPU_BACKEND` selects a backend).
     pub fn new() -> Result<Self, GpuError> {
-        let desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        Self::open(None)
+    }
+
+    /// Opens a device on the best adapter of `backends` only (e.g. to compare Vulkan and GL in
+    /// one process), whatever `WGPU_BACKEND` says.
+    pub fn with_backends(backends: wgpu::Backends) -> Result<Self, GpuError> {
+        Self::open(Some(backends))
+    }
+
+    fn open(backends: Option<wgpu::Backends>) -> Result<Self, GpuError> {
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        if let Some(b) = backends {
+            desc.backends = b;
+        }
         let backends = [
             (wgpu::Backends::VULKAN, "Vulkan"),
             (wgpu::Backends::GL, "GL"),

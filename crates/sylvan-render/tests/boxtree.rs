@@ -6,6 +6,7 @@ mod common;
 use common::gpu;
 use glam::{Vec2, Vec3};
 use sylvan_plant::Plant;
+use sylvan_render::bake::codec::Codec;
 use sylvan_render::bake::{self, CachePolicy, cache};
 use sylvan_render::technique::boxtree::{BoxTreeBake, BoxTreeBakeParams, PlaneLayout};
 
@@ -168,6 +169,30 @@ fn cache_is_reused_invalidated_and_repaired() {
         hash: bake::cache_key::<BoxTreeBake>(&plant, &params),
     };
     assert!(matches!(cache::read(&path, &key), cache::Lookup::Hit(_)));
+    // A payload whose checksum holds but whose indices do not fit the plant is re-baked too.
+    let mut bad = first.clone();
+    bad.leaf_indices[0] = u32::MAX;
+    cache::write(&path, &key, &bad.encode()).unwrap();
+    let (fixed, r5) = bake(&plant, &params, &policy);
+    assert!(
+        !r5.from_cache,
+        "a payload that does not fit the plant must be re-baked"
+    );
+    assert!(
+        r5.stale.as_deref().unwrap_or("").contains("does not fit"),
+        "{:?}",
+        r5.stale
+    );
+    assert_eq!(fixed, first);
+    // A cache folder that cannot be written to is a warning, not an error: the asset is used.
+    let locked = temp_dir("bake-cache-locked");
+    let file = locked.join("file");
+    std::fs::write(&file, b"").unwrap();
+    // Its "folder" is a file, so no cache entry can be written below it.
+    let (asset, r6) = bake(&plant, &params, &CachePolicy::Dir(file.clone()));
+    assert!(!r6.from_cache);
+    assert_eq!(asset, first);
+    std::fs::remove_dir_all(&locked).unwrap();
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -450,7 +450,10 @@ fn band_tables_and_set_reach_the_technique() {
         .map(|v| v.as_u64().unwrap())
         .sum();
     assert!(n >= 3, "{banded}");
-    assert!(banded["trees_drawn"]["octahedral"].as_u64() >= Some(1), "{banded}");
+    assert!(
+        banded["trees_drawn"]["octahedral"].as_u64() >= Some(1),
+        "{banded}"
+    );
     let closed = render(&["--set", "boxtree.texel_pixels=60"]);
     let opened = render(&["--set", "boxtree.texel_pixels=0.1"]);
     assert!(

@@ -49,7 +49,35 @@ struct GpuBakeView {
     to_camera: [f32; 4],
 }
 
-const RAW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+/// The raw G-buffer format: `Rgba32Float` where the adapter can render to it, else (wgpu's GL
+/// backend: "Format Rgba32Float is not renderable") `Rgba16Float` — ample for what the bake
+/// keeps (8-bit colour, normal and depth per texel after the resolve).
+fn raw_format(gpu: &Gpu) -> wgpu::TextureFormat {
+    let full = wgpu::TextureFormat::Rgba32Float;
+    let renderable = gpu
+        .adapter
+        .get_texture_format_features(full)
+        .allowed_usages
+        .contains(wgpu::TextureUsages::RENDER_ATTACHMENT);
+    if renderable {
+        full
+    } else {
+        wgpu::TextureFormat::Rgba16Float
+    }
+}
+
+/// `f16` bits → `f32` (the `Rgba16Float` read-back).
+fn f16_to_f32(h: u16) -> f32 {
+    let sign = if h & 0x8000 != 0 { -1.0 } else { 1.0 };
+    let exp = (h >> 10) & 0x1f;
+    let frac = (h & 0x3ff) as f32;
+    sign * match exp {
+        0 => frac * (-24f32).exp2(),
+        31 if frac == 0.0 => f32::INFINITY,
+        31 => f32::NAN,
+        e => (1.0 + frac / 1024.0) * (e as f32 - 15.0).exp2(),
+    }
+}
 /// Bytes of raw samples read back per batch, at most.
 const BATCH_BYTES: u64 = 64 << 20;
 
@@ -64,6 +92,7 @@ pub struct PlantBaker {
     sampler: wgpu::Sampler,
     tile: u32,
     ss: u32,
+    raw: wgpu::TextureFormat,
 }
 
 impl PlantBaker {
@@ -118,9 +147,10 @@ impl PlantBaker {
             bind_group_layouts: &[Some(&bind_layout)],
             immediate_size: 0,
         });
+        let raw = raw_format(gpu);
         let targets = [
-            Some(wgpu::ColorTargetState::from(RAW_FORMAT)),
-            Some(wgpu::ColorTargetState::from(RAW_FORMAT)),
+            Some(wgpu::ColorTargetState::from(raw)),
+            Some(wgpu::ColorTargetState::from(raw)),
         ];
         let buffers = [Some(crate::technique::geometry::GpuPlantVertex::LAYOUT)];
         let make = |fs: &str| {
@@ -163,6 +193,7 @@ impl PlantBaker {
             sampler,
             tile,
             ss,
+            raw,
         })
     }
 
@@ -176,7 +207,7 @@ impl PlantBaker {
     ) -> Result<Vec<TileImage>, RenderError> {
         let px = self.tile * self.ss;
         let max_dim = gpu.device.limits().max_texture_dimension_2d;
-        let per_sample = 2 * RAW_FORMAT.block_copy_size(None).unwrap_or(16) as u64;
+        let per_sample = 2 * self.raw.block_copy_size(None).unwrap_or(16) as u64;
         let by_bytes = (BATCH_BYTES / (px as u64 * px as u64 * per_sample)).max(1) as u32;
         let batch = (max_dim / px).min(by_bytes).max(1) as usize;
         let mut out = Vec::with_capacity(requests.len());
@@ -244,8 +275,8 @@ impl PlantBaker {
                 view_formats: &[],
             })
         };
-        let color = make("bake_color", RAW_FORMAT);
-        let normal = make("bake_normal", RAW_FORMAT);
+        let color = make("bake_color", self.raw);
+        let normal = make("bake_normal", self.raw);
         let depth = make("bake_depth", DEPTH_FORMAT);
         let (cv, nv, dv) = (
             color.create_view(&Default::default()),
@@ -309,7 +340,12 @@ impl PlantBaker {
         gpu.queue.submit([encoder.finish()]);
         let floats = |t: &wgpu::Texture| -> Result<Vec<[f32; 4]>, RenderError> {
             let bytes = sylvan_gpu::read_texture_bytes(gpu, t)?;
-            Ok(bytemuck::pod_collect_to_vec(&bytes))
+            Ok(if self.raw == wgpu::TextureFormat::Rgba32Float {
+                bytemuck::pod_collect_to_vec(&bytes)
+            } else {
+                let halves: Vec<[u16; 4]> = bytemuck::pod_collect_to_vec(&bytes);
+                halves.iter().map(|h| h.map(f16_to_f32)).collect()
+            })
         };
         let (rc, rn) = (floats(&color)?, floats(&normal)?);
         gpu.check()?;
@@ -382,6 +418,12 @@ pub trait Bake {
     ) -> Result<Self::Asset, RenderError>;
     /// What `sylvan bake` reports about an asset.
     fn describe(asset: &Self::Asset) -> AssetSummary;
+    /// Checks a decoded asset against the plant it is for (indices in range, finite bounds):
+    /// a cache file whose checksum holds but whose content does not fit is re-baked like a
+    /// corrupt one. The message names what is wrong.
+    fn check(_asset: &Self::Asset, _plant: &Plant) -> Result<(), String> {
+        Ok(())
+    }
 }
 
 /// A baked asset described for `sylvan bake`'s line and JSON.
@@ -491,7 +533,13 @@ pub fn load_or_bake<B: Bake>(
     let mut stale = None;
     if let Some(p) = &path {
         match cache::read(p, &key) {
-            cache::Lookup::Hit(payload) => match <B::Asset as codec::Codec>::decode(&payload) {
+            cache::Lookup::Hit(payload) => match <B::Asset as codec::Codec>::decode(&payload)
+                .map_err(|e| format!("payload does not decode: {e}"))
+                .and_then(|a| {
+                    B::check(&a, plant)
+                        .map_err(|e| format!("payload does not fit the plant: {e}"))?;
+                    Ok(a)
+                }) {
                 Ok(baked) => {
                     return Ok((
                         baked,
@@ -505,7 +553,7 @@ pub fn load_or_bake<B: Bake>(
                         },
                     ));
                 }
-                Err(e) => stale = Some(format!("payload does not decode: {e}")),
+                Err(why) => stale = Some(why),
             },
             cache::Lookup::Miss => {}
             cache::Lookup::Stale(why) => stale = Some(why),
@@ -513,13 +561,18 @@ pub fn load_or_bake<B: Bake>(
     }
     let baked = B::bake(gpu, plant, params, progress)?;
     let payload = codec::Codec::encode(&baked);
-    if let Some(p) = &path {
-        cache::write(p, &key, &payload).map_err(|e| {
-            RenderError::Option(format!(
-                "{}: cannot write the bake cache: {e} — set SYLVAN_CACHE_DIR to a writable folder",
-                p.display()
-            ))
-        })?;
+    if let Some(p) = &path
+        && let Err(e) = cache::write(p, &key, &payload)
+    {
+        let what = format!(
+            "{}: cannot write the bake cache: {e} — set SYLVAN_CACHE_DIR to a writable folder",
+            p.display()
+        );
+        // `--out FILE` asked for the file; a cache folder is only a cache: draw from memory.
+        if matches!(policy, CachePolicy::File(_)) {
+            return Err(RenderError::Option(what));
+        }
+        eprintln!("warning: {what} (the asset is used from memory)");
     }
     Ok((
         baked,
@@ -532,4 +585,22 @@ pub fn load_or_bake<B: Bake>(
             bytes: payload.len() as u64,
         },
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn halves_decode() {
+        for (bits, v) in [
+            (0x3c00u16, 1.0f32),
+            (0xc000, -2.0),
+            (0x3800, 0.5),
+            (0x0000, 0.0),
+            (0x7bff, 65504.0),
+            (0x0001, 5.960_464_5e-8),
+        ] {
+            assert_eq!(super::f16_to_f32(bits), v, "{bits:#x}");
+        }
+        assert!(super::f16_to_f32(0x7e00).is_nan());
+    }
 }

@@ -167,6 +167,8 @@ impl Growable {
 
 /// Side of one atlas layer, at most (texels).
 const LAYER_SIZE: u32 = 2048;
+/// The same on wgpu's GL backend (see [`TileAtlas::upload`]).
+const GL_LAYER_SIZE: u32 = 1024;
 
 /// Square tiles of one size packed row-major into the layers of a 2D array texture, as close
 /// to square and as tight as the tile count allows; each tile keeps its own mip chain (tile
@@ -194,7 +196,12 @@ impl TileAtlas {
         tiles: &[&[Vec<u8>]],
     ) -> Result<Self, RenderError> {
         let limits = gpu.device.limits();
-        let max_row = (LAYER_SIZE.min(limits.max_texture_dimension_2d) / tile).max(1);
+        // On wgpu's GL backend (llvmpipe, Mesa 22.3) a 2048² × 4-layer atlas samples black
+        // while 1024² × 16 layers of the same tiles, 2048² × 3 and 4096² × 2 draw right
+        // (measured, cause not found): GL atlases use 1024² layers.
+        let gl = gpu.info.backend == wgpu::Backend::Gl;
+        let layer_size = if gl { GL_LAYER_SIZE } else { LAYER_SIZE };
+        let max_row = (layer_size.min(limits.max_texture_dimension_2d) / tile).max(1);
         let count = (tiles.len() as u32).max(1);
         let per_row = ((count as f64).sqrt().ceil() as u32).clamp(1, max_row);
         let rows = count.div_ceil(per_row).min(max_row);
@@ -209,12 +216,22 @@ impl TileAtlas {
             }));
         }
         let mips = tile.ilog2() + 1;
+        // wgpu's GL backend picks the GL target from the size: one layer makes a GL_TEXTURE_2D
+        // and a square multiple of 6 layers a cube map, which a `texture_2d_array` binding then
+        // samples as incomplete (black, opaque). Give GL at least two layers, never 6k.
+        let mut allocated = layers;
+        if gl {
+            allocated = allocated.max(2);
+            if allocated.is_multiple_of(6) && per_row == rows {
+                allocated += 1;
+            }
+        }
         let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
             label: Some(label),
             size: wgpu::Extent3d {
                 width: per_row * tile,
                 height: rows * tile,
-                depth_or_array_layers: layers,
+                depth_or_array_layers: allocated,
             },
             mip_level_count: mips,
             sample_count: 1,
@@ -264,7 +281,7 @@ impl TileAtlas {
         let bytes = (0..mips)
             .map(|m| {
                 let side = (tile >> m).max(1) as u64;
-                (per_row as u64 * side) * (rows as u64 * side) * 4 * layers as u64
+                (per_row as u64 * side) * (rows as u64 * side) * 4 * allocated as u64
             })
             .sum();
         Ok(Self {

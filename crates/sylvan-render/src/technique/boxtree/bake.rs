@@ -352,6 +352,44 @@ impl crate::bake::Bake for BoxTreeBake {
     type Params = BoxTreeBakeParams;
     type Asset = BoxTreeBaked;
 
+    fn check(b: &BoxTreeBaked, plant: &Plant) -> Result<(), String> {
+        for (what, indices, mesh) in [
+            ("leaf", &b.leaf_indices, &plant.leaves),
+            ("wood", &b.wood_indices, &plant.wood),
+        ] {
+            if indices.len() % 3 != 0 || indices.len() != mesh.indices.len() {
+                return Err(format!(
+                    "{} {what} indices for the plant's {}",
+                    indices.len(),
+                    mesh.indices.len()
+                ));
+            }
+            if let Some(i) = indices
+                .iter()
+                .find(|&&i| i as usize >= mesh.positions.len())
+            {
+                return Err(format!(
+                    "{what} index {i} out of range of {} vertices",
+                    mesh.positions.len()
+                ));
+            }
+        }
+        for (k, bx) in b.boxes.iter().enumerate() {
+            if bx.node as usize >= plant.hierarchy.nodes.len().max(1) {
+                return Err(format!(
+                    "box {k}: node {} of {}",
+                    bx.node,
+                    plant.hierarchy.nodes.len()
+                ));
+            }
+            let finite = bx.min.iter().chain(&bx.max).all(|c| c.is_finite());
+            if !finite || (0..3).any(|a| bx.min[a] > bx.max[a]) {
+                return Err(format!("box {k}: bounds {:?}–{:?}", bx.min, bx.max));
+            }
+        }
+        Ok(())
+    }
+
     fn describe(b: &BoxTreeBaked) -> crate::bake::AssetSummary {
         let mut fields = serde_json::Map::new();
         fields.insert("boxes".into(), b.boxes.len().into());

@@ -45,6 +45,31 @@ impl crate::bake::Bake for HbtBake {
     type Params = HbtBakeParams;
     type Asset = HbtBaked;
 
+    fn check(b: &HbtBaked, plant: &Plant) -> Result<(), String> {
+        let objects = plant.instancing.objects.len();
+        let bounds = |lo: &[f32; 3], hi: &[f32; 3]| {
+            lo.iter().chain(hi).all(|c| c.is_finite()) && (0..3).all(|a| lo[a] <= hi[a])
+        };
+        if !bounds(&b.bbox_min, &b.bbox_max) {
+            return Err(format!("tree bounds {:?}–{:?}", b.bbox_min, b.bbox_max));
+        }
+        for (k, o) in b.objects.iter().chain(&b.small.objects).enumerate() {
+            if o.object != REST_OBJECT && o.object as usize >= objects {
+                return Err(format!(
+                    "object {k} is base object {} of {objects}",
+                    o.object
+                ));
+            }
+            if !bounds(&o.bbox_min, &o.bbox_max) {
+                return Err(format!(
+                    "object {k} bounds {:?}–{:?}",
+                    o.bbox_min, o.bbox_max
+                ));
+            }
+        }
+        Ok(())
+    }
+
     fn describe(b: &HbtBaked) -> crate::bake::AssetSummary {
         let (tree_bytes, branch_bytes) = b.image_bytes();
         let cube_bytes = (b.cubes.len() + b.small.cubes.len()) as u64;
