@@ -16,6 +16,9 @@ use sylvan_gpu::{FrameTimer, Gpu, OUTPUT_FORMAT, RenderTarget, Resolver, TimerKi
 use sylvan_plant::Plant;
 use sylvan_scene::{Camera, PlantSource, Scene, Setting, Sun};
 
+/// Most GPU memory the shadow cascades may take (declared before allocating).
+pub const MAX_SHADOW_BYTES: u64 = 1 << 30;
+
 /// Largest supersampling factor per axis (`--spp` up to 64).
 pub const MAX_SPP: u32 = 64;
 
@@ -183,9 +186,23 @@ impl Renderer {
             )));
         }
         let factor = options.factor()?;
-        let res = options
-            .shadow_resolution
-            .clamp(256, gpu.device.limits().max_texture_dimension_2d);
+        let max = gpu.device.limits().max_texture_dimension_2d;
+        if !(256..=max).contains(&options.shadow_resolution) {
+            return Err(RenderError::Option(format!(
+                "--shadow-res {}: must be 256 to {max} (this adapter's largest texture) — use 2048",
+                options.shadow_resolution
+            )));
+        }
+        let res = options.shadow_resolution;
+        let shadow_bytes = CASCADES as u64 * res as u64 * res as u64 * 4;
+        if shadow_bytes > MAX_SHADOW_BYTES {
+            return Err(RenderError::Option(format!(
+                "--shadow-res {res}: {CASCADES} cascades of {res}² depth take {:.1} GB, more than the {} MB allowed — use {} or less",
+                shadow_bytes as f64 / 1e9,
+                MAX_SHADOW_BYTES >> 20,
+                ((MAX_SHADOW_BYTES / (CASCADES as u64 * 4)) as f64).sqrt() as u32 & !255
+            )));
+        }
         let frame = FrameResources::new(gpu, res);
         let resolver = Resolver::new(gpu);
         let targets = Self::make_targets(gpu, &resolver, options.width, options.height, factor)?;

@@ -58,7 +58,43 @@ fn clap_one_line(e: &clap::Error) -> String {
     format!("{what} — see `{help}`")
 }
 
+/// Mesa's drivers print `error: XDG_RUNTIME_DIR is invalid or not set in the environment` on
+/// every run without a usable one: give the process a private one (0700) when it has none.
+#[cfg(not(unix))]
+fn quiet_driver_noise() {}
+
+/// Mesa's drivers print `error: XDG_RUNTIME_DIR is invalid or not set in the environment` on
+/// every run without a usable one: give the process a private one (0700) when it has none.
+#[cfg(unix)]
+fn quiet_driver_noise() {
+    let usable = std::env::var_os("XDG_RUNTIME_DIR").is_some_and(|d| {
+        std::fs::metadata(&d).is_ok_and(|m| {
+            use std::os::unix::fs::PermissionsExt;
+            m.is_dir() && m.permissions().mode() & 0o077 == 0
+        })
+    });
+    if usable {
+        return;
+    }
+    let dir = std::env::temp_dir().join(format!("sylvan-runtime-{}", uid()));
+    let made = std::fs::create_dir_all(&dir).is_ok() && {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700)).is_ok()
+    };
+    if made {
+        // SAFETY: called first thing in `main`, before any other thread exists.
+        unsafe { std::env::set_var("XDG_RUNTIME_DIR", &dir) };
+    }
+}
+
+/// The user id from `/proc/self` (no libc dependency); 0 when unknown.
+fn uid() -> u32 {
+    use std::os::unix::fs::MetadataExt;
+    std::fs::metadata("/proc/self").map_or(0, |m| m.uid())
+}
+
 fn main() -> ExitCode {
+    quiet_driver_noise();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) if !e.use_stderr() => {

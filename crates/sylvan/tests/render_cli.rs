@@ -183,6 +183,15 @@ fn bad_flags_give_one_line_errors() {
         &sylvan(&["bench", scene, "--frames", "0"], &dir),
         &["--frames 0"],
     );
+    // Checked against a declared memory limit before allocating (was a bare "Out of Memory").
+    assert_one_line_error(
+        &sylvan(&["render", scene, "--shadow-res", "16384"], &dir),
+        &["--shadow-res 16384", "GB", "use 8192 or less"],
+    );
+    assert_one_line_error(
+        &sylvan(&["render", scene, "--shadow-res", "100"], &dir),
+        &["--shadow-res 100", "256"],
+    );
 }
 
 #[test]
