@@ -375,7 +375,8 @@ impl crate::bake::Bake for BoxTreeBake {
             }
         }
         for (k, bx) in b.boxes.iter().enumerate() {
-            if bx.node as usize >= plant.hierarchy.nodes.len().max(1) {
+            // `u32::MAX`: the whole plant of a plant without a branch hierarchy.
+            if bx.node != u32::MAX && bx.node as usize >= plant.hierarchy.nodes.len() {
                 return Err(format!(
                     "box {k}: node {} of {}",
                     bx.node,
