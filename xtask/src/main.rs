@@ -167,7 +167,8 @@ fn ensure_adapter(cli: &Path, gl_too: bool) -> Result<(), String> {
             }
         }
     }
-    if gl_too && !adapter_on(cli, "gl") {
+    // Installing lavapipe above installs the GL driver too: look again only then.
+    if gl_too && !(gl || adapter_on(cli, "gl")) {
         eprintln!(
             "xtask: no GL adapter found — installing Mesa's GL driver for the GL test pass with apt-get: {}",
             GL_PACKAGES.join(" ")

@@ -58,8 +58,7 @@ fn clap_one_line(e: &clap::Error) -> String {
     format!("{what} — see `{help}`")
 }
 
-/// Mesa's drivers print `error: XDG_RUNTIME_DIR is invalid or not set in the environment` on
-/// every run without a usable one: give the process a private one (0700) when it has none.
+/// Only Mesa on Unix prints the `XDG_RUNTIME_DIR` noise: nothing to do elsewhere.
 #[cfg(not(unix))]
 fn quiet_driver_noise() {}
 
