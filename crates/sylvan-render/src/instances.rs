@@ -29,6 +29,12 @@ impl GpuTreeInstance {
     };
 }
 
+/// A tree's tint seed in [0, 1) from its [`TreeInstance::seed`] (a Knuth multiplicative hash,
+/// so neighbouring seeds get unrelated tints).
+pub fn tint_seed(seed: u32) -> f32 {
+    (seed.wrapping_mul(2_654_435_761) >> 8) as f32 / (1u32 << 24) as f32
+}
+
 /// A tree prepared for culling: GPU record plus world bounding sphere.
 #[derive(Clone, Copy, Debug)]
 struct Placed {
@@ -66,9 +72,8 @@ impl Instances {
     pub fn new(gpu: &Gpu, trees: &[TreeInstance], bounds: &[SpeciesBounds]) -> Self {
         let placed: Vec<Placed> = trees
             .iter()
-            .enumerate()
-            .filter(|(_, t)| (t.species as usize) < bounds.len())
-            .map(|(i, t)| {
+            .filter(|t| (t.species as usize) < bounds.len())
+            .map(|t| {
                 let b = bounds[t.species as usize];
                 let scale = t.height / b.max.y.max(1e-3);
                 let local_centre = (b.min + b.max) * 0.5 * scale;
@@ -80,8 +85,7 @@ impl Instances {
                         local_centre.y,
                         -s * local_centre.x + c * local_centre.z,
                     );
-                let seed =
-                    ((i as u32).wrapping_mul(2_654_435_761) >> 8) as f32 / (1u32 << 24) as f32;
+                let seed = tint_seed(t.seed);
                 Placed {
                     gpu: GpuTreeInstance {
                         base_scale: [t.position.x, t.position.y, t.position.z, scale],

@@ -213,7 +213,13 @@ impl Renderer {
                 max: Vec3::from(p.bbox_max),
             })
             .collect();
-        let instances = Instances::new(gpu, &scene.trees, &bounds);
+        let trees = scene.all_trees().map_err(|e| {
+            RenderError::Option(format!(
+                "{e}: technique `{}` draws every tree from the CPU — lower the density or use a GPU-driven technique",
+                options.technique
+            ))
+        })?;
+        let instances = Instances::new(gpu, &trees, &bounds);
         let settings: Vec<Setting> = scene
             .technique_params
             .iter()
@@ -243,7 +249,7 @@ impl Renderer {
             .heights
             .iter()
             .fold((f32::MAX, f32::MIN), |(a, b), &h| (a.min(h), b.max(h)));
-        let tallest = scene.trees.iter().map(|t| t.height).fold(0.0, f32::max);
+        let tallest = trees.iter().map(|t| t.height).fold(0.0, f32::max);
         let renderer = Self {
             sky: SkyPass::new(gpu, &frame),
             terrain: TerrainPass::new(gpu, &frame, t),

@@ -28,6 +28,7 @@ fn grove() -> Scene {
         .map(|i| TreeInstance {
             position: Vec3::new(50.0 + 9.0 * i as f32, 0.0, 60.0 + 5.0 * (i % 2) as f32),
             species: 0,
+            seed: 0,
             height: 12.0,
             rotation: i as f32 * 1.7,
         })

@@ -277,6 +277,7 @@ fn draw_settings_reuse_the_cache_and_bake_settings_rebake() {
     let trees = vec![sylvan_scene::TreeInstance {
         position: Vec3::new(40.0, 0.0, 40.0),
         species: 0,
+        seed: 0,
         height: 10.0,
         rotation: 0.0,
     }];

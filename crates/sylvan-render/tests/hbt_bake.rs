@@ -437,6 +437,7 @@ fn species_sharing_a_plant_share_its_images() {
     let trees = vec![TreeInstance {
         position: Vec3::new(30.0, 0.0, 30.0),
         species: 0,
+        seed: 0,
         height: 10.0,
         rotation: 0.0,
     }];

@@ -24,6 +24,7 @@ fn relighting_beats_an_impostor_baked_under_one_light() {
                 55.0 + 8.0 * (i / 3) as f32 + 2.0 * (i % 2) as f32,
             ),
             species: 0,
+            seed: 0,
             height: 10.0,
             rotation: i as f32 * 1.3,
         })
@@ -106,6 +107,7 @@ fn a_tree_in_another_trees_shadow_darkens_as_in_the_reference() {
     let tree = |x: f32, z: f32, height: f32| TreeInstance {
         position: Vec3::new(x, 0.0, z),
         species: 0,
+        seed: 0,
         height,
         rotation: 0.4,
     };

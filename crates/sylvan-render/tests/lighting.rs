@@ -43,6 +43,7 @@ fn one_tree() -> (sylvan_scene::Scene, sylvan_scene::Camera) {
         height: 10.0,
         rotation: 0.0,
         species: 0,
+        seed: 0,
     };
     let camera = top_down(50.0, 50.0, 60.0, 40.0);
     (scene(flat, vec![tree], camera, sun(90.0, 45.0)), camera)
@@ -86,6 +87,7 @@ fn hills_with_trees() -> sylvan_scene::Scene {
                 height: 8.0 + (i + j) as f32 % 4.0,
                 rotation: i as f32,
                 species: 0,
+                seed: 0,
             });
         }
     }

@@ -71,6 +71,7 @@ fn one_tree(eye: Vec3, rotation: f32, sun: Sun, with_tree: bool) -> Scene {
         vec![TreeInstance {
             position: at,
             species: 0,
+            seed: 0,
             height: 10.0,
             rotation,
         }]

@@ -230,6 +230,7 @@ pub(crate) fn parse_positions(
             height,
             rotation: rng.f32() * std::f32::consts::TAU,
             species,
+            seed: 0,
         });
     }
     if let Some((_, kind)) = size_col {

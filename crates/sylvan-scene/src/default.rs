@@ -118,6 +118,7 @@ impl Scene {
             terrain,
             species,
             trees,
+            seeded: None,
             sun: Sun::default(),
             sky: Sky::default(),
             fog: Fog::default(),

@@ -5,7 +5,9 @@
 use crate::error::{ErrorKind, Location, SceneError};
 use crate::heightmap::{Purpose, read_gray};
 use crate::params::{LodBand, Origin, ParamValue, Setting};
-use crate::placement::{Placement, PlacementError, PlacementMethod, place_trees};
+use crate::placement::{
+    MAX_TREES, Placement, PlacementError, PlacementMethod, SeededForest, place_trees,
+};
 use crate::species::{Growth, RawSpecies, build_species};
 use crate::terrain::{MAX_TERRAIN_SIZE_M, ProceduralTerrain};
 use crate::types::{Camera, Fog, Scene, Sky, Sun, Terrain, TreeInstance};
@@ -13,6 +15,7 @@ use glam::Vec3;
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use toml::Spanned;
 
 pub(crate) type Span = std::ops::Range<usize>;
@@ -303,8 +306,27 @@ pub(crate) fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> 
         }
         species.push(s);
     }
-    let trees = match place_trees(&terrain, &layouts, &placement, &fixed) {
-        Ok(p) => p.trees,
+    for (i, t) in fixed.iter_mut().enumerate() {
+        t.seed = i as u32;
+    }
+    let placed = match placement.method {
+        // Tiled worlds are produced tile by tile by the renderer, never all at once here.
+        PlacementMethod::Tiled => SeededForest::new(terrain.size, &layouts, placement.seed, &fixed)
+            .and_then(|forest| {
+                if fixed.len() > MAX_TREES {
+                    return Err(PlacementError::TooManyTrees {
+                        estimated: fixed.len() as f64,
+                        limit: MAX_TREES as f64,
+                    });
+                }
+                Ok((fixed, forest.map(Arc::new)))
+            }),
+        PlacementMethod::Poisson => {
+            place_trees(&terrain, &layouts, &placement, &fixed).map(|p| (p.trees, None))
+        }
+    };
+    let (trees, seeded) = match placed {
+        Ok(p) => p,
         Err(e) => {
             // Point at the species contributing the most trees.
             let area = terrain.size[0] * terrain.size[1] * 1e-4;
@@ -348,6 +370,7 @@ pub(crate) fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> 
         terrain,
         species,
         trees,
+        seeded,
         lod_chain,
         lod_bands,
         technique_params,

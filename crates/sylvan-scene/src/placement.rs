@@ -9,17 +9,26 @@
 //! `u·ρ` picks the species by the cumulative local densities — density maps thus modulate both
 //! acceptance and the species mix. Expected count is exactly ∫D over the terrain.
 //!
+//! Under `tiled` placement every candidate draws its numbers from a hash of (seed, tile copy,
+//! point index) rather than from one stream, so the trees of any rectangle can be produced
+//! alone, in any order, and come out identical: [`SeededForest`] produces a world tile by tile,
+//! on demand, in time and memory proportional to the rectangle, never to the world.
+//!
 //! Deviation: tiles are repeated without per-tile rotation, since rotating a periodic tile would
 //! break the minimum spacing at tile borders; the random thinning hides the period.
 
-use crate::rng::Rng;
+use crate::rng::{Rng, hash2, mix};
 use crate::terrain::bilinear;
 use crate::types::{Terrain, TreeInstance};
 use glam::{Vec2, Vec3};
 use std::fmt;
 
-/// Most trees a scene may hold.
+/// Most trees a scene may place when it is loaded (positions files and `poisson` placement);
+/// `tiled` placement produces its trees tile by tile and is limited by [`MAX_WORLD_TREES`].
 pub const MAX_TREES: usize = 2_000_000;
+/// Most trees a `tiled` world may hold in all (expected count); only the tiles in range are
+/// ever produced.
+pub const MAX_WORLD_TREES: f64 = 1e10;
 /// Most candidate points a `poisson` pattern may generate (use `tiled` beyond).
 pub const MAX_PATTERN_POINTS: usize = 6_000_000;
 /// Highest accepted density, trees per hectare (one tree per m²).
@@ -146,6 +155,8 @@ pub enum PlacementError {
     TooManyTrees {
         /// Expected trees (density × area, plus fixed trees).
         estimated: f64,
+        /// The limit exceeded ([`MAX_TREES`] placed at load, [`MAX_WORLD_TREES`] in a world).
+        limit: f64,
     },
     /// A `poisson` pattern would exceed [`MAX_PATTERN_POINTS`].
     TooManyCandidates {
@@ -157,10 +168,9 @@ pub enum PlacementError {
 impl fmt::Display for PlacementError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            PlacementError::TooManyTrees { estimated } => write!(
+            PlacementError::TooManyTrees { estimated, limit } => write!(
                 f,
-                "about {:.0} trees, more than the limit of {MAX_TREES}",
-                estimated
+                "about {estimated:.0} trees, more than the limit of {limit:.0}"
             ),
             PlacementError::TooManyCandidates { estimated } => write!(
                 f,
@@ -175,9 +185,10 @@ impl fmt::Display for PlacementError {
 impl std::error::Error for PlacementError {}
 
 /// Placed trees and the spacing they respect.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct Placed {
-    /// Fixed trees first (as given), then the density-driven ones.
+    /// Fixed trees first (as given), then the density-driven ones; each density-driven tree's
+    /// `seed` is its index here.
     pub trees: Vec<TreeInstance>,
     /// Minimum distance between density-driven trees (and from them to fixed trees), metres;
     /// 0 when no species is density-driven.
@@ -223,7 +234,8 @@ pub fn peak_per_ha(layouts: &[SpeciesLayout]) -> f32 {
 }
 
 /// Place `layouts` on `terrain` around the `fixed` trees (e.g. from positions CSVs), which are
-/// kept as given. Same inputs → identical output.
+/// kept as given. Same inputs → identical output. Under `tiled` placement this produces the
+/// whole terrain at once (bounded by [`MAX_TREES`]); [`SeededForest`] produces it tile by tile.
 pub fn place_trees(
     terrain: &Terrain,
     layouts: &[SpeciesLayout],
@@ -233,96 +245,249 @@ pub fn place_trees(
     let size = terrain.size;
     let estimated = estimate_trees(size, layouts) + fixed.len() as f64;
     if estimated > MAX_TREES as f64 {
-        return Err(PlacementError::TooManyTrees { estimated });
-    }
-    let peak = peak_per_ha(layouts) * 1e-4;
-    if peak <= 0.0 {
-        return Ok(Placed {
-            trees: fixed.to_vec(),
-            min_spacing_m: 0.0,
+        return Err(PlacementError::TooManyTrees {
+            estimated,
+            limit: MAX_TREES as f64,
         });
     }
-    let radius = (PACKING / peak).sqrt();
-    let area = size[0] as f64 * size[1] as f64;
-    let mut rng = Rng::new(placement.seed);
-    let (candidates, period, rho) = match placement.method {
+    let mut trees = Vec::with_capacity(fixed.len() + (estimated * 1.05) as usize + 16);
+    trees.extend_from_slice(fixed);
+    let min_spacing_m = match placement.method {
+        PlacementMethod::Tiled => {
+            let Some(forest) = SeededForest::new(size, layouts, placement.seed, fixed)? else {
+                return Ok(Placed {
+                    trees,
+                    min_spacing_m: 0.0,
+                });
+            };
+            forest.produce(terrain, Vec2::ZERO, Vec2::from(size), &mut trees);
+            forest.min_spacing_m()
+        }
         PlacementMethod::Poisson => {
+            let peak = peak_per_ha(layouts) * 1e-4;
+            if peak <= 0.0 {
+                return Ok(Placed {
+                    trees,
+                    min_spacing_m: 0.0,
+                });
+            }
+            let radius = (PACKING / peak).sqrt();
+            let area = size[0] as f64 * size[1] as f64;
             let estimated = PATTERN_DENSITY * area / (radius as f64 * radius as f64);
             if estimated > MAX_PATTERN_POINTS as f64 {
                 return Err(PlacementError::TooManyCandidates { estimated });
             }
-            let pts = poisson_disk(size, radius, rng.next_u64());
-            let rho = pts.len() as f64 / area.max(1e-6);
-            (pts, None, rho)
-        }
-        PlacementMethod::Tiled => {
-            let tile = (radius * (TILE_POINTS / PATTERN_DENSITY as f32).sqrt()).max(4.0 * radius);
-            let pts = poisson_tile(tile, radius, rng.next_u64());
-            let rho = pts.len() as f64 / (tile as f64 * tile as f64);
-            (pts, Some(tile), rho)
+            let mut rng = Rng::new(placement.seed);
+            let candidates = poisson_disk(size, radius, rng.next_u64());
+            let blockers = SpatialHash::new(
+                fixed.iter().map(|t| Vec2::new(t.position.x, t.position.z)),
+                radius,
+            );
+            let thin = Thinning {
+                layouts,
+                size,
+                rho: candidates.len() as f64 / area.max(1e-6),
+                radius,
+                blockers: &blockers,
+            };
+            let mut local = vec![0.0f32; layouts.len()];
+            for &p in &candidates {
+                if let Some(mut t) = thin.consider(terrain, p, &mut rng, &mut local) {
+                    t.seed = trees.len() as u32;
+                    trees.push(t);
+                }
+            }
+            radius
         }
     };
-    let blockers = SpatialHash::new(
-        fixed.iter().map(|t| Vec2::new(t.position.x, t.position.z)),
-        radius,
-    );
-    let mut trees = Vec::with_capacity(fixed.len() + (estimated * 1.05) as usize + 16);
-    trees.extend_from_slice(fixed);
-    let mut local = vec![0.0f32; layouts.len()];
-    let mut consider = |p: Vec2, rng: &mut Rng, trees: &mut Vec<TreeInstance>| {
+    if trees.len() > MAX_TREES {
+        return Err(PlacementError::TooManyTrees {
+            estimated: trees.len() as f64,
+            limit: MAX_TREES as f64,
+        });
+    }
+    Ok(Placed {
+        trees,
+        min_spacing_m,
+    })
+}
+
+/// Thinning a candidate pattern to the species' densities (shared by both methods).
+#[derive(Debug, Clone)]
+struct Thinning<'a> {
+    layouts: &'a [SpeciesLayout],
+    size: [f32; 2],
+    /// The pattern's measured density (points per m²).
+    rho: f64,
+    radius: f32,
+    /// Fixed trees: no density-driven tree within `radius` of one.
+    blockers: &'a SpatialHash,
+}
+
+impl Thinning<'_> {
+    /// The tree grown at candidate `p`, if any; draws exactly three numbers from `rng` for a
+    /// candidate on the terrain (so a stream stays aligned whatever is kept).
+    fn consider(
+        &self,
+        terrain: &Terrain,
+        p: Vec2,
+        rng: &mut Rng,
+        local: &mut [f32],
+    ) -> Option<TreeInstance> {
         if !terrain.contains(p.x, p.y) {
-            return;
+            return None;
         }
-        let u = rng.f64() * rho;
+        let u = rng.f64() * self.rho;
         let mut cum = 0.0f64;
         let mut chosen = None;
-        for (i, l) in layouts.iter().enumerate() {
-            local[i] = l.density.per_m2(size, p.x, p.y);
+        for (i, l) in self.layouts.iter().enumerate() {
+            local[i] = l.density.per_m2(self.size, p.x, p.y);
             cum += local[i] as f64;
             if chosen.is_none() && u < cum {
                 chosen = Some(i);
             }
         }
         let (hr, rot) = (rng.f32(), rng.f32());
-        let Some(i) = chosen else { return };
-        if blockers.any_within(p, radius) {
-            return;
+        let i = chosen?;
+        if self.blockers.any_within(p, self.radius) {
+            return None;
         }
-        let [h0, h1] = layouts[i].height_m;
-        trees.push(TreeInstance {
+        let [h0, h1] = self.layouts[i].height_m;
+        Some(TreeInstance {
             position: Vec3::new(p.x, terrain.height_at(p.x, p.y), p.y),
             height: h0 + (h1 - h0) * hr,
             rotation: rot * std::f32::consts::TAU,
-            species: layouts[i].species,
-        });
-    };
-    match period {
-        None => {
-            for &p in &candidates {
-                consider(p, &mut rng, &mut trees);
-            }
+            species: self.layouts[i].species,
+            seed: 0,
+        })
+    }
+}
+
+/// The density-driven trees of `tiled` placement, produced for any rectangle of the terrain
+/// alone: a periodic Poisson tile repeated over the terrain, each candidate thinned with
+/// numbers hashed from (seed, tile copy, point index). The trees of a rectangle are exactly
+/// those of the whole terrain that fall in it, whatever else was produced before; memory is
+/// the pattern (≈ 2,500 points) plus the fixed trees it must keep clear of.
+#[derive(Debug, Clone)]
+pub struct SeededForest {
+    size: [f32; 2],
+    layouts: Vec<SpeciesLayout>,
+    /// The periodic tile's points, sorted by z.
+    pattern: Vec<Vec2>,
+    tile: f32,
+    rho: f64,
+    radius: f32,
+    seed: u64,
+    blockers: SpatialHash,
+}
+
+impl SeededForest {
+    /// The forest of `layouts` over a terrain of extent `size`, kept clear of `fixed`; `None`
+    /// when no layout has any density.
+    pub fn new(
+        size: [f32; 2],
+        layouts: &[SpeciesLayout],
+        seed: u64,
+        fixed: &[TreeInstance],
+    ) -> Result<Option<Self>, PlacementError> {
+        let estimated = estimate_trees(size, layouts);
+        if estimated > MAX_WORLD_TREES {
+            return Err(PlacementError::TooManyTrees {
+                estimated,
+                limit: MAX_WORLD_TREES,
+            });
         }
-        Some(tile) => {
-            let tiles = size.map(|s| (s / tile).ceil() as u32);
-            for ty in 0..tiles[1] {
-                for tx in 0..tiles[0] {
-                    let origin = Vec2::new(tx as f32, ty as f32) * tile;
-                    for &p in &candidates {
-                        consider(origin + p, &mut rng, &mut trees);
+        let peak = peak_per_ha(layouts) * 1e-4;
+        if peak <= 0.0 {
+            return Ok(None);
+        }
+        let radius = (PACKING / peak).sqrt();
+        let tile = (radius * (TILE_POINTS / PATTERN_DENSITY as f32).sqrt()).max(4.0 * radius);
+        let mut pattern = poisson_tile(tile, radius, Rng::new(seed).next_u64());
+        let rho = pattern.len() as f64 / (tile as f64 * tile as f64);
+        pattern.sort_by(|a, b| a.y.total_cmp(&b.y).then(a.x.total_cmp(&b.x)));
+        Ok(Some(Self {
+            size,
+            layouts: layouts.to_vec(),
+            pattern,
+            tile,
+            rho,
+            radius,
+            seed,
+            blockers: SpatialHash::new(
+                fixed.iter().map(|t| Vec2::new(t.position.x, t.position.z)),
+                radius,
+            ),
+        }))
+    }
+
+    /// Minimum distance between its trees (and from them to the fixed trees), metres.
+    pub fn min_spacing_m(&self) -> f32 {
+        self.radius
+    }
+
+    /// Expected number of trees over the whole terrain.
+    pub fn estimated_trees(&self) -> f64 {
+        estimate_trees(self.size, &self.layouts)
+    }
+
+    /// Expected number of trees in a rectangle of `area_m2` where the density peaks (an upper
+    /// bound for sizing buffers).
+    pub fn peak_trees(&self, area_m2: f64) -> f64 {
+        peak_per_ha(&self.layouts) as f64 * 1e-4 * area_m2
+    }
+
+    /// The tallest tree any layout can grow, metres.
+    pub fn tallest_m(&self) -> f32 {
+        self.layouts
+            .iter()
+            .map(|l| l.height_m[1])
+            .fold(0.0, f32::max)
+    }
+
+    /// Appends the trees in `[min, max)` (x, z) to `out`, in a fixed order (tile copies by row,
+    /// then pattern points by z). Time ∝ the rectangle's area.
+    pub fn produce(&self, terrain: &Terrain, min: Vec2, max: Vec2, out: &mut Vec<TreeInstance>) {
+        let min = min.max(Vec2::ZERO);
+        let max = max.min(Vec2::from(self.size));
+        if min.x >= max.x || min.y >= max.y {
+            return;
+        }
+        let thin = Thinning {
+            layouts: &self.layouts,
+            size: self.size,
+            rho: self.rho,
+            radius: self.radius,
+            blockers: &self.blockers,
+        };
+        let mut local = vec![0.0f32; self.layouts.len()];
+        let copies = |lo: f32, hi: f32| {
+            (lo / self.tile).floor() as i64..=((hi / self.tile).ceil() as i64 - 1)
+        };
+        for ty in copies(min.y, max.y) {
+            let oz = ty as f32 * self.tile;
+            // The pattern is sorted by z: only the points whose row lies in the rectangle.
+            let first = self.pattern.partition_point(|p| oz + p.y < min.y);
+            for tx in copies(min.x, max.x) {
+                let ox = tx as f32 * self.tile;
+                for (j, p) in self.pattern.iter().enumerate().skip(first) {
+                    let q = Vec2::new(ox + p.x, oz + p.y);
+                    if q.y >= max.y {
+                        break;
+                    }
+                    if q.x < min.x || q.x >= max.x {
+                        continue;
+                    }
+                    let key = hash2(self.seed ^ mix(j as u64 + 1), tx, ty);
+                    let mut rng = Rng::new(key);
+                    if let Some(mut t) = thin.consider(terrain, q, &mut rng, &mut local) {
+                        t.seed = (key >> 32) as u32;
+                        out.push(t);
                     }
                 }
             }
         }
     }
-    if trees.len() > MAX_TREES {
-        return Err(PlacementError::TooManyTrees {
-            estimated: trees.len() as f64,
-        });
-    }
-    Ok(Placed {
-        trees,
-        min_spacing_m: radius,
-    })
 }
 
 /// Bridson's Poisson-disk sampling over `[0, size[0]] × [0, size[1]]`: no two points closer than
@@ -425,6 +590,7 @@ fn bridson(size: [f32; 2], radius: f32, seed: u64, periodic: bool) -> Vec<Vec2> 
 }
 
 /// A uniform grid over points for "anything within r?" queries.
+#[derive(Debug, Clone)]
 struct SpatialHash {
     cell: f32,
     cells: std::collections::HashMap<(i64, i64), Vec<Vec2>>,
@@ -510,6 +676,7 @@ mod tests {
             height: 5.0,
             rotation: 0.0,
             species: 1,
+            seed: 0,
         };
         let layout = SpeciesLayout {
             species: 0,

@@ -11,8 +11,12 @@ pub struct Scene {
     pub terrain: Terrain,
     /// Species, indexed by [`TreeInstance::species`].
     pub species: Vec<Species>,
-    /// Every tree, placed on the terrain.
+    /// The trees placed when the scene was loaded (positions files, and every density-driven
+    /// tree under `poisson` placement), in load order.
     pub trees: Vec<TreeInstance>,
+    /// The density-driven trees of `tiled` placement, produced for any rectangle on demand
+    /// (never all at once for a large world); `None` under `poisson` placement.
+    pub seeded: Option<std::sync::Arc<crate::placement::SeededForest>>,
     /// The sun.
     pub sun: Sun,
     /// Sky and ambient colours.
@@ -75,6 +79,9 @@ pub struct TreeInstance {
     pub rotation: f32,
     /// Index into [`Scene::species`].
     pub species: u32,
+    /// Per-tree random seed (colour variation): a tree placed at load gets its index in
+    /// [`Scene::trees`]; a seeded tree a hash of where it came from.
+    pub seed: u32,
 }
 
 /// The sun. Azimuth is measured from +Z towards +X; elevation above the horizon; degrees.
@@ -115,6 +122,31 @@ pub struct Camera {
     pub look_at: Vec3,
     /// Vertical field of view in degrees.
     pub fov_deg: f32,
+}
+
+impl Scene {
+    /// Every tree at once: [`Scene::trees`], then the seeded forest produced over the whole
+    /// terrain. Errors beyond [`crate::MAX_TREES`] (draw a large tiled world tile by tile).
+    pub fn all_trees(&self) -> Result<Vec<TreeInstance>, crate::PlacementError> {
+        let Some(forest) = &self.seeded else {
+            return Ok(self.trees.clone());
+        };
+        let estimated = forest.estimated_trees() + self.trees.len() as f64;
+        let limit = crate::MAX_TREES as f64;
+        if estimated > limit {
+            return Err(crate::PlacementError::TooManyTrees { estimated, limit });
+        }
+        let mut all = self.trees.clone();
+        all.reserve((forest.estimated_trees() * 1.05) as usize);
+        let size = glam::Vec2::from(self.terrain.size);
+        forest.produce(&self.terrain, glam::Vec2::ZERO, size, &mut all);
+        Ok(all)
+    }
+
+    /// Expected number of trees in all (placed and seeded).
+    pub fn estimated_trees(&self) -> f64 {
+        self.trees.len() as f64 + self.seeded.as_ref().map_or(0.0, |f| f.estimated_trees())
+    }
 }
 
 impl Sun {

@@ -196,6 +196,7 @@ pub fn one_tree_scene(height: f32, dist: f32, fov: f32) -> sylvan_scene::Scene {
     let trees = vec![TreeInstance {
         position: at,
         species: 0,
+        seed: 0,
         height,
         rotation: 0.3,
     }];

@@ -136,7 +136,10 @@ pub fn terrain(size: f32, res: u32, f: impl Fn(f32, f32) -> f32) -> Terrain {
 }
 
 /// A scene over `terrain` with `trees` of the test tree, seen from `camera`.
-pub fn scene(terrain: Terrain, trees: Vec<TreeInstance>, camera: Camera, sun: Sun) -> Scene {
+pub fn scene(terrain: Terrain, mut trees: Vec<TreeInstance>, camera: Camera, sun: Sun) -> Scene {
+    for (i, t) in trees.iter_mut().enumerate() {
+        t.seed = i as u32;
+    }
     Scene {
         terrain,
         species: vec![Species {
@@ -145,6 +148,7 @@ pub fn scene(terrain: Terrain, trees: Vec<TreeInstance>, camera: Camera, sun: Su
             height_m: [10.0, 10.0],
         }],
         trees,
+        seeded: None,
         sun,
         sky: Sky {
             zenith: [0.3, 0.5, 0.95],

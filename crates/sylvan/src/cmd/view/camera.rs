@@ -401,6 +401,7 @@ mod tests {
             height: 10.0,
             rotation: 0.0,
             species: 0,
+            seed: 0,
         };
         let trees = [tree(50.0), tree(20.0), tree(-20.0)];
         let origin = Vec3::new(0.0, 6.0, 0.0);
