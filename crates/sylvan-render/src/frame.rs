@@ -103,6 +103,20 @@ impl Frustum {
         Self { planes }
     }
 
+    /// The six planes (xyz normal pointing inside, w offset; normalised).
+    pub fn planes(&self) -> &[Vec4; 6] {
+        &self.planes
+    }
+
+    /// Whether an axis-aligned box may be partly inside (no plane has it wholly outside).
+    pub fn intersects_box(&self, min: Vec3, max: Vec3) -> bool {
+        self.planes.iter().all(|p| {
+            let n = p.truncate();
+            let corner = Vec3::select(n.cmpge(Vec3::ZERO), max, min);
+            n.dot(corner) + p.w >= 0.0
+        })
+    }
+
     /// Whether a sphere is at least partly inside.
     pub fn intersects_sphere(&self, centre: Vec3, radius: f32) -> bool {
         self.planes

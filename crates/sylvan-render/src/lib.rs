@@ -27,6 +27,7 @@ mod sky;
 pub mod technique;
 mod terrain;
 pub mod texture;
+pub mod world;
 
 pub use error::RenderError;
 pub use frame::DebugView;

@@ -10,6 +10,7 @@ use crate::technique::{
     BakeProgress, BandRange, BuildContext, DrawContext, DrawCounts, FrameInput, Technique, registry,
 };
 use crate::terrain::TerrainPass;
+use crate::world::{IndirectDraw, World, WorldView};
 use glam::{Mat4, Vec3};
 use std::collections::BTreeMap;
 use sylvan_gpu::{FrameTimer, Gpu, OUTPUT_FORMAT, RenderTarget, Resolver, TimerKind};
@@ -50,6 +51,9 @@ pub struct RenderOptions {
     pub settings: Vec<Setting>,
     /// Where baked assets are cached.
     pub cache: CachePolicy,
+    /// Feed even a GPU-driven technique from CPU-culled lists of every tree, placed before the
+    /// first frame (the frame as it was before the tiled world; for comparisons).
+    pub cpu_driven: bool,
 }
 
 impl Default for RenderOptions {
@@ -67,6 +71,7 @@ impl Default for RenderOptions {
             debug: DebugView::None,
             settings: Vec::new(),
             cache: CachePolicy::Default,
+            cpu_driven: false,
         }
     }
 }
@@ -129,6 +134,12 @@ pub struct Renderer {
     technique: Box<dyn Technique>,
     bake_reports: Vec<BakeReport>,
     instances: Instances,
+    /// The tiled world, for a GPU-driven technique (its trees never reach `instances`).
+    world: Option<World>,
+    /// The technique's indirect draws per (pass, species) list.
+    indirect: Vec<IndirectDraw>,
+    /// Trees in the whole world (expected count for a seeded forest).
+    trees_in_world: usize,
     resolver: Resolver,
     timer: FrameTimer,
     targets: Targets,
@@ -213,12 +224,25 @@ impl Renderer {
                 max: Vec3::from(p.bbox_max),
             })
             .collect();
-        let trees = scene.all_trees().map_err(|e| {
-            RenderError::Option(format!(
-                "{e}: technique `{}` draws every tree from the CPU — lower the density or use a GPU-driven technique",
-                options.technique
-            ))
-        })?;
+        let entry = registry::find(&options.technique)?;
+        // A GPU-driven technique draws the world tile by tile; any other gets every tree now.
+        let (world, trees) = if entry.gpu_driven && !options.cpu_driven {
+            (Some(World::new(gpu, scene, &bounds)?), Vec::new())
+        } else {
+            let trees = scene.all_trees().map_err(|e| {
+                RenderError::Option(format!(
+                    "{e}: technique `{}` places every tree before the first frame — lower the density, or use a GPU-driven technique ({})",
+                    options.technique,
+                    registry::REGISTRY
+                        .iter()
+                        .filter(|e| e.gpu_driven)
+                        .map(|e| e.name)
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ))
+            })?;
+            (None, trees)
+        };
         let instances = Instances::new(gpu, &trees, &bounds);
         let settings: Vec<Setting> = scene
             .technique_params
@@ -230,7 +254,6 @@ impl Renderer {
         for band in &scene.lod_bands {
             registry::check_settings(&band.params)?;
         }
-        let entry = registry::find(&options.technique)?;
         let built = (entry.build)(&mut BuildContext {
             gpu,
             frame: &frame,
@@ -249,7 +272,11 @@ impl Renderer {
             .heights
             .iter()
             .fold((f32::MAX, f32::MIN), |(a, b), &h| (a.min(h), b.max(h)));
-        let tallest = trees.iter().map(|t| t.height).fold(0.0, f32::max);
+        let tallest = trees.iter().chain(&scene.trees).map(|t| t.height).fold(
+            scene.seeded.as_ref().map_or(0.0, |f| f.tallest_m()),
+            f32::max,
+        );
+        let indirect = technique.indirect_draws();
         let renderer = Self {
             sky: SkyPass::new(gpu, &frame),
             terrain: TerrainPass::new(gpu, &frame, t),
@@ -257,6 +284,9 @@ impl Renderer {
             technique,
             bake_reports,
             instances,
+            world,
+            indirect,
+            trees_in_world: scene.estimated_trees().round() as usize,
             resolver,
             timer: FrameTimer::new(gpu, options.wall_timer),
             targets,
@@ -347,13 +377,27 @@ impl Renderer {
             });
         self.timer.begin(&mut encoder);
         let cpu_start = std::time::Instant::now();
-        self.instances.update(
-            gpu,
-            &frustum,
-            view.eye,
-            view.far,
-            shadows.then_some(&cascades),
-        );
+        if let Some(world) = &mut self.world {
+            let mut frustums: [Option<Frustum>; 1 + CASCADES] = Default::default();
+            frustums[0] = Some(frustum);
+            for (f, c) in frustums[1..].iter_mut().zip(&cascades) {
+                *f = shadows.then(|| Frustum::from_matrix(c.view_proj));
+            }
+            let wv = WorldView {
+                eye: view.eye,
+                far: view.far,
+                frustums: &frustums,
+            };
+            world.prepare(gpu, &mut encoder, &wv, &self.indirect)?;
+        } else {
+            self.instances.update(
+                gpu,
+                &frustum,
+                view.eye,
+                view.far,
+                shadows.then_some(&cascades),
+            );
+        }
 
         let input = FrameInput {
             eye: view.eye,
@@ -380,6 +424,7 @@ impl Renderer {
             gpu.queue.write_buffer(buffer, 0, bytemuck::bytes_of(&r));
         }
 
+        let culled = self.world.as_ref().map(World::culled);
         let mut shadow_counts = DrawCounts::default();
         // With shadows off the maps are never sampled (`sun_dir.w` = 0): skip the passes.
         for c in (0..CASCADES).filter(|_| shadows) {
@@ -406,6 +451,7 @@ impl Renderer {
                 frame_bind: &self.frame.cascade_binds[c],
                 instances: &self.instances,
                 ranges: &self.instances.ranges[1 + c],
+                culled: culled.as_ref(),
             };
             shadow_counts += self.technique.draw(&mut pass, &ctx);
         }
@@ -443,6 +489,7 @@ impl Renderer {
                 frame_bind: &self.frame.main_bind,
                 instances: &self.instances,
                 ranges: &self.instances.ranges[0],
+                culled: culled.as_ref(),
             };
             main_counts += self.technique.draw(&mut pass, &ctx);
         }
@@ -459,9 +506,31 @@ impl Renderer {
         gpu.queue.submit([encoder.finish()]);
         let frame_ms = self.timer.read_ms(gpu)?;
         gpu.check()?;
+        let mut world_stats = None;
+        if let Some(world) = &mut self.world {
+            // The frame is done (the timer waited): its counts are ready without a stall.
+            world.finish_frame(gpu)?;
+            let listed = world.listed();
+            let species = self.instances.species_count().max(1);
+            let tris = |pass: usize| -> u64 {
+                self.indirect
+                    .iter()
+                    .map(|d| {
+                        listed[pass * species + d.species as usize] as u64
+                            * (d.index_count / 3) as u64
+                    })
+                    .sum()
+            };
+            main_counts.triangles = self.terrain.triangles() + tris(0);
+            shadow_counts.triangles = (1..=CASCADES)
+                .filter(|_| shadows)
+                .map(|p| self.terrain.triangles() + tris(p))
+                .sum();
+            world_stats = Some(world.stats());
+        }
 
         let asset_bytes = self.technique.bytes();
-        let technique_stats = self
+        let mut technique_stats: BTreeMap<String, BTreeMap<String, f64>> = self
             .technique
             .stats_by_technique()
             .into_iter()
@@ -473,18 +542,27 @@ impl Renderer {
                 )
             })
             .collect();
+        if let Some(w) = &world_stats {
+            technique_stats.insert("world".to_string(), w.named());
+        }
         Ok(FrameStats {
             technique_stats,
             frame_ms,
             cpu_ms,
             timer: self.timer.kind(),
-            trees_total: self.instances.total(),
-            trees_drawn: self
-                .technique
-                .trees_drawn(&self.instances)
-                .into_iter()
-                .map(|(name, n)| (name.to_string(), n))
-                .collect(),
+            trees_total: match &self.world {
+                Some(_) => self.trees_in_world,
+                None => self.instances.total(),
+            },
+            trees_drawn: match &world_stats {
+                Some(w) => [(self.technique.name().to_string(), w.trees_drawn[0])].into(),
+                None => self
+                    .technique
+                    .trees_drawn(&self.instances)
+                    .into_iter()
+                    .map(|(name, n)| (name.to_string(), n))
+                    .collect(),
+            },
             triangles: main_counts.triangles,
             shadow_triangles: shadow_counts.triangles,
             draw_calls: main_counts.draw_calls + shadow_counts.draw_calls + 1,
@@ -494,7 +572,8 @@ impl Renderer {
                 + self.frame.bytes()
                 + t.hdr.bytes()
                 + t.output.bytes()
-                + self.instances.buffer().size(),
+                + self.instances.buffer().size()
+                + self.world.as_ref().map_or(0, World::bytes),
         })
     }
 

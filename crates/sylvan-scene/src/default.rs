@@ -119,6 +119,7 @@ impl Scene {
             species,
             trees,
             seeded: None,
+            world: Default::default(),
             sun: Sun::default(),
             sky: Sky::default(),
             fog: Fog::default(),

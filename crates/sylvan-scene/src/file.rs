@@ -10,7 +10,7 @@ use crate::placement::{
 };
 use crate::species::{Growth, RawSpecies, build_species};
 use crate::terrain::{MAX_TERRAIN_SIZE_M, ProceduralTerrain};
-use crate::types::{Camera, Fog, Scene, Sky, Sun, Terrain, TreeInstance};
+use crate::types::{Camera, Fog, Scene, Sky, Sun, Terrain, TreeInstance, World};
 use glam::Vec3;
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -32,6 +32,7 @@ struct RawScene {
     camera: Option<RawCamera>,
     lod: Option<RawLod>,
     placement: Option<RawPlacement>,
+    world: Option<RawWorld>,
     /// `[technique.NAME]` tables: every key with its value's span.
     technique: Option<BTreeMap<String, RawParams>>,
 }
@@ -103,6 +104,15 @@ struct RawBand {
     to: Option<Spanned<f32>>,
     #[serde(default)]
     params: RawParams,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawWorld {
+    tile_m: Option<Spanned<f32>>,
+    tree_distance_m: Option<Spanned<f32>>,
+    prefetch_m: Option<Spanned<f32>>,
+    cache_mib: Option<Spanned<i64>>,
 }
 
 #[derive(Deserialize)]
@@ -371,6 +381,7 @@ pub(crate) fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> 
         species,
         trees,
         seeded,
+        world: build_world(&cx, raw.world)?,
         lod_chain,
         lod_bands,
         technique_params,
@@ -622,6 +633,63 @@ fn build_sky(cx: &Ctx, raw: Option<RawSky>) -> Result<Sky, SceneError> {
         horizon: colour(cx, raw.horizon, d.horizon, "horizon")?,
         ground: colour(cx, raw.ground, d.ground, "ground")?,
     })
+}
+
+/// Accepted `[world]` ranges.
+const TILE_M: std::ops::RangeInclusive<f32> = 16.0..=4096.0;
+const CACHE_MIB: std::ops::RangeInclusive<i64> = 16..=1 << 20;
+
+fn build_world(cx: &Ctx, raw: Option<RawWorld>) -> Result<World, SceneError> {
+    let mut w = World::default();
+    let Some(raw) = raw else { return Ok(w) };
+    if let Some(v) = &raw.tile_m {
+        let t = *v.get_ref();
+        if !TILE_M.contains(&t) {
+            return Err(cx.invalid(
+                &v.span(),
+                format!("tile_m = {t} is out of range"),
+                format!(
+                    "give {} to {} metres (256 suits most worlds)",
+                    TILE_M.start(),
+                    TILE_M.end()
+                ),
+            ));
+        }
+        w.tile_m = t;
+        w.prefetch_m = t;
+    }
+    for (v, slot, what) in [
+        (
+            &raw.tree_distance_m,
+            &mut w.tree_distance_m,
+            "tree_distance_m",
+        ),
+        (&raw.prefetch_m, &mut w.prefetch_m, "prefetch_m"),
+    ] {
+        if let Some(v) = v {
+            let d = *v.get_ref();
+            if d.is_nan() || d < 0.0 || (what == "prefetch_m" && !d.is_finite()) {
+                return Err(cx.invalid(
+                    &v.span(),
+                    format!("{what} = {d} is not a distance"),
+                    "give metres ≥ 0",
+                ));
+            }
+            *slot = d;
+        }
+    }
+    if let Some(v) = &raw.cache_mib {
+        let m = *v.get_ref();
+        if !CACHE_MIB.contains(&m) {
+            return Err(cx.invalid(
+                &v.span(),
+                format!("cache_mib = {m} is out of range"),
+                format!("give {} to {} MiB", CACHE_MIB.start(), CACHE_MIB.end()),
+            ));
+        }
+        w.cache_mib = m as u32;
+    }
+    Ok(w)
 }
 
 fn build_fog(cx: &Ctx, raw: Option<RawFog>) -> Result<Fog, SceneError> {

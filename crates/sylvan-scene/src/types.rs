@@ -32,8 +32,36 @@ pub struct Scene {
     pub lod_bands: Vec<crate::params::LodBand>,
     /// Every `[technique.NAME]` table's settings, in file order.
     pub technique_params: Vec<crate::params::Setting>,
+    /// How the world is split into tiles and how much of it is kept (`[world]`).
+    pub world: World,
     /// The file the scene came from (`None` for the built-in scene).
     pub source: Option<PathBuf>,
+}
+
+/// The `[world]` table: the tiles trees are produced in, how far they are drawn, and the memory
+/// the tile cache may hold. Used by GPU-driven techniques, which draw a world tile by tile.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct World {
+    /// Side of a tile, metres.
+    pub tile_m: f32,
+    /// Trees are drawn (and their tiles produced) up to this distance from the eye, metres;
+    /// infinite draws the whole terrain.
+    pub tree_distance_m: f32,
+    /// Tiles are produced this far beyond `tree_distance_m` ahead of need, metres.
+    pub prefetch_m: f32,
+    /// Most memory the tile cache may hold (CPU and GPU copies of the trees), MiB.
+    pub cache_mib: u32,
+}
+
+impl Default for World {
+    fn default() -> Self {
+        Self {
+            tile_m: 256.0,
+            tree_distance_m: f32::INFINITY,
+            prefetch_m: 256.0,
+            cache_mib: 1024,
+        }
+    }
 }
 
 /// A regular height grid over X ∈ `[0, size[0]]`, Z ∈ `[0, size[1]]`.

@@ -203,6 +203,7 @@ pub const ENTRY: Entry = Entry {
     kind: Kind::Chain,
     summary: "the LOD chain: a technique per distance band ([lod] chain or [[lod.band]]), cross-faded",
     debug_color: [1.0, 1.0, 1.0],
+    gpu_driven: false,
     schema: params::schema::<NoParams, NoParams>,
     check: |s| params::resolve::<NoParams, NoParams>("auto", s).map(|_| ()),
     build: |cx| Chain::build(cx),
@@ -311,6 +312,7 @@ impl Technique for Chain {
                 frame_bind: ctx.frame_bind,
                 instances: list,
                 ranges: &list.ranges[ctx.pass],
+                culled: None,
             };
             counts += t.draw(pass, &sub);
         }

@@ -171,6 +171,11 @@ pub trait Technique {
     fn reallocations(&self) -> u32 {
         0
     }
+    /// A GPU-driven technique's draws per (pass, species) list, in the order it draws them
+    /// ([`crate::world::Culled::args`]'s `k`); empty for a technique fed on the CPU.
+    fn indirect_draws(&self) -> Vec<crate::world::IndirectDraw> {
+        Vec::new()
+    }
 }
 
 /// What a technique may look at once per frame, before any pass is recorded.
@@ -200,6 +205,9 @@ pub struct DrawContext<'a> {
     pub instances: &'a Instances,
     /// `ranges[species]`: this pass's instances per species.
     pub ranges: &'a [Range<u32>],
+    /// The GPU cull's lists and indirect arguments (GPU-driven techniques; `None` when the
+    /// trees come from `instances`).
+    pub culled: Option<&'a crate::world::Culled<'a>>,
 }
 
 /// What a technique reports back about a pass.

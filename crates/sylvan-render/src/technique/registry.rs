@@ -67,6 +67,10 @@ pub struct Entry {
     pub summary: &'static str,
     /// Its colour in the "colour by technique" debug view (linear RGB).
     pub debug_color: [f32; 3],
+    /// Draws the tiled world from the GPU cull's lists ([`super::DrawContext::culled`]): the
+    /// CPU never touches a tree per frame, and no tree is placed before it comes within range.
+    /// Otherwise every tree is placed when the renderer is made and handed over on the CPU.
+    pub gpu_driven: bool,
     /// Every parameter with its default, unit and doc.
     pub schema: fn() -> Vec<ParamSpec>,
     /// Checks settings for this technique without a GPU (unknown keys, types, ranges).

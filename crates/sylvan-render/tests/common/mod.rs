@@ -149,6 +149,7 @@ pub fn scene(terrain: Terrain, mut trees: Vec<TreeInstance>, camera: Camera, sun
         }],
         trees,
         seeded: None,
+        world: Default::default(),
         sun,
         sky: Sky {
             zenith: [0.3, 0.5, 0.95],

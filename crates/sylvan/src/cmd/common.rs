@@ -34,6 +34,10 @@ pub struct ViewArgs {
     /// Shadow-map resolution per cascade.
     #[arg(long, default_value_t = 2048)]
     pub shadow_res: u32,
+    /// Feed a GPU-driven technique from CPU-culled lists of every tree placed up front (the
+    /// frame before the tiled world; for comparisons).
+    #[arg(long)]
+    pub cpu_driven: bool,
     #[command(flatten)]
     pub bake: BakeArgs,
 }
@@ -198,6 +202,7 @@ impl ViewArgs {
             shadow_resolution: self.shadow_res,
             settings: self.bake.settings()?,
             cache: self.bake.cache(),
+            cpu_driven: self.cpu_driven,
             ..Default::default()
         };
         options.factor()?;

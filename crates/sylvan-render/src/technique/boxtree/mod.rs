@@ -214,6 +214,7 @@ pub const ENTRY: Entry = Entry {
     kind: Kind::PerTree,
     summary: "LCV04: a bounding-box hierarchy with six images per box, opened by distance",
     debug_color: [0.1, 0.5, 1.0],
+    gpu_driven: false,
     schema: params::schema::<BoxTreeBakeParams, BoxTreeDrawParams>,
     check: |s| params::resolve::<BoxTreeBakeParams, BoxTreeDrawParams>("boxtree", s).map(|_| ()),
     build: |cx| {

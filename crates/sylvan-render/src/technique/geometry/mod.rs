@@ -17,6 +17,7 @@ use crate::frame::FrameResources;
 use crate::instances::GpuTreeInstance;
 use crate::pipeline::{self, PassKind, PipelineSpec};
 use crate::texture;
+use crate::world::IndirectDraw;
 use bytemuck::{Pod, Zeroable};
 use sylvan_gpu::{Gpu, layout};
 use sylvan_plant::{Mesh, Plant};
@@ -345,6 +346,7 @@ pub const ENTRY: Entry = Entry {
     kind: Kind::PerTree,
     summary: "the reference: every tree as its full meshes",
     debug_color: [1.0, 0.45, 0.05],
+    gpu_driven: true,
     schema: params::schema::<NoParams, NoParams>,
     check: |s| params::resolve::<NoParams, NoParams>("geometry", s).map(|_| ()),
     build: |cx| {
@@ -379,6 +381,17 @@ impl Technique for Geometry {
     fn bytes(&self) -> u64 {
         self.species.iter().map(SpeciesMeshes::bytes).sum()
     }
+
+    /// Per species its wood, then its leaves (the draws of [`Geometry::record_indirect`]).
+    fn indirect_draws(&self) -> Vec<IndirectDraw> {
+        self.meshes()
+            .map(|(species, _, mesh)| IndirectDraw {
+                species: species as u32,
+                index_count: mesh.index_count,
+                first_index: 0,
+            })
+            .collect()
+    }
 }
 
 impl Geometry {
@@ -392,12 +405,59 @@ impl Geometry {
         Ok(Self { species, pipes })
     }
 
+    /// Every (species, is leaves, mesh), wood before leaves: the order of the indirect draws.
+    fn meshes(&self) -> impl Iterator<Item = (usize, bool, &GpuMesh)> {
+        [false, true].into_iter().flat_map(move |leaves| {
+            self.species.iter().enumerate().filter_map(move |(i, s)| {
+                let mesh = if leaves { &s.leaves } else { &s.wood };
+                mesh.as_ref().map(|m| (i, leaves, m))
+            })
+        })
+    }
+
+    /// The GPU-driven pass: one indirect draw per (species, mesh) from the cull's lists. The
+    /// triangle counts are the last frame's (read back after it).
+    fn record_indirect(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        ctx: &DrawContext<'_>,
+        culled: &crate::world::Culled<'_>,
+        shadow: bool,
+    ) -> DrawCounts {
+        let (wood, leaf) = self.pipes.for_pass(shadow);
+        let mut counts = DrawCounts::default();
+        pass.set_bind_group(0, ctx.frame_bind, &[]);
+        let mut current = None;
+        for (k, (species, leaves, mesh)) in self.meshes().enumerate() {
+            let Some(instances) = culled.instances(ctx.pass, species) else {
+                continue;
+            };
+            if current != Some(leaves) {
+                pass.set_pipeline(if leaves { leaf } else { wood });
+                current = Some(leaves);
+            }
+            pass.set_bind_group(1, &self.species[species].material, &[]);
+            pass.set_vertex_buffer(0, mesh.vertices.slice(..));
+            pass.set_vertex_buffer(1, instances);
+            pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
+            let (args, offset) = culled.args(ctx.pass, k);
+            pass.draw_indexed_indirect(args, offset);
+            counts.draw_calls += 1;
+            counts.triangles +=
+                culled.listed(ctx.pass, species) as u64 * (mesh.index_count / 3) as u64;
+        }
+        counts
+    }
+
     fn record(
         &self,
         pass: &mut wgpu::RenderPass<'_>,
         ctx: &DrawContext<'_>,
         shadow: bool,
     ) -> DrawCounts {
+        if let Some(culled) = ctx.culled {
+            return self.record_indirect(pass, ctx, culled, shadow);
+        }
         let (wood, leaf) = self.pipes.for_pass(shadow);
         let mut counts = DrawCounts::default();
         pass.set_bind_group(0, ctx.frame_bind, &[]);

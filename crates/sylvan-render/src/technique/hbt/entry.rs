@@ -18,6 +18,7 @@ pub const ENTRY: Entry = Entry {
     kind: Kind::PerTree,
     summary: "MNP01: hierarchical bidirectional textures with visibility cube-maps, down to meshes",
     debug_color: [0.9, 0.1, 0.9],
+    gpu_driven: false,
     schema: params::schema::<HbtBakeParams, HbtDrawParams>,
     check: |s| resolve(s).map(|_| ()),
     build: |cx| {

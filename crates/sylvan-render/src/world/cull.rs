@@ -1,0 +1,442 @@
+//! The GPU cull: per frame, the page table (tiles a pass may see), the (pass, species) list
+//! layout and the uniforms are uploaded; one dispatch culls every tree of those pages into the
+//! lists, a second writes each indirect draw's arguments, and the lists' counts are copied
+//! for reading back once the frame is done.
+
+use super::{PASSES, PoolTree, TREE_BYTES};
+use crate::RenderError;
+use crate::frame::Frustum;
+use crate::instances::SpeciesBounds;
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use sylvan_gpu::Gpu;
+
+/// Most species the cull's uniform holds.
+pub const MAX_SPECIES: usize = 64;
+
+/// One draw a technique makes per (pass, species) list: the index range of one of the
+/// species' meshes, drawn once per listed tree.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct IndirectDraw {
+    /// The species whose list it draws.
+    pub species: u32,
+    /// Indices per instance.
+    pub index_count: u32,
+    /// First index.
+    pub first_index: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub(crate) struct GpuPage {
+    pub first: u32,
+    pub count: u32,
+    pub passes: u32,
+    pub _pad: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuList {
+    offset: u32,
+    capacity: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuDraw {
+    list: u32,
+    index_count: u32,
+    first_index: u32,
+    _pad: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuParams {
+    planes: [[f32; 4]; 6 * PASSES],
+    eye_far: [f32; 4],
+    info: [u32; 4],
+    fade: [f32; 4],
+    species: [[f32; 4]; MAX_SPECIES],
+}
+
+/// What one frame culls.
+pub(crate) struct FrameCull<'a> {
+    pub eye: Vec3,
+    /// Trees whose sphere is this far or farther are not drawn in the camera pass.
+    pub far: f32,
+    /// Where their presence starts falling to 0 at `far` (infinite: no fade).
+    pub fade_start: f32,
+    pub frustums: &'a [Option<Frustum>; PASSES],
+    pub pages: &'a [GpuPage],
+    /// Per (pass, species) list: the most trees it can receive.
+    pub capacity: &'a [u32],
+    pub draws: &'a [IndirectDraw],
+}
+
+/// The last frame's lists, as the techniques draw them.
+pub struct Culled<'a> {
+    trees: &'a wgpu::Buffer,
+    args: &'a wgpu::Buffer,
+    offsets: &'a [u32],
+    capacity: &'a [u32],
+    listed: &'a [u32],
+    species: usize,
+    draws_per_pass: usize,
+}
+
+impl Culled<'_> {
+    /// Bind this as vertex buffer slot 1 for (pass, species): the list's records from 0.
+    pub fn instances(&self, pass: usize, species: usize) -> Option<wgpu::BufferSlice<'_>> {
+        let i = pass * self.species + species;
+        if self.capacity[i] == 0 {
+            return None;
+        }
+        let start = self.offsets[i] as u64 * TREE_BYTES;
+        Some(
+            self.trees
+                .slice(start..start + self.capacity[i] as u64 * TREE_BYTES),
+        )
+    }
+
+    /// Trees in the (pass, species) list in the last frame read back (for statistics).
+    pub fn listed(&self, pass: usize, species: usize) -> u32 {
+        self.listed[pass * self.species + species]
+    }
+
+    /// The indirect arguments buffer and the byte offset of draw `k` (of the technique's
+    /// [`IndirectDraw`] list) in `pass`.
+    pub fn args(&self, pass: usize, k: usize) -> (&wgpu::Buffer, u64) {
+        (self.args, ((pass * self.draws_per_pass + k) * 20) as u64)
+    }
+}
+
+/// Pipelines and buffers of the cull.
+pub(crate) struct Cull {
+    layout: wgpu::BindGroupLayout,
+    cull: wgpu::ComputePipeline,
+    args_pipeline: wgpu::ComputePipeline,
+    params: wgpu::Buffer,
+    species_spheres: [[f32; 4]; MAX_SPECIES],
+    species: usize,
+    pages: Storage,
+    lists: Storage,
+    counters: Storage,
+    trees: Storage,
+    draws: Storage,
+    args: Storage,
+    readback: wgpu::Buffer,
+    readback_len: usize,
+    offsets: Vec<u32>,
+    capacity: Vec<u32>,
+    listed: Vec<u32>,
+    draws_per_pass: usize,
+    max_binding: u64,
+}
+
+/// A storage buffer that grows (never shrinks).
+struct Storage {
+    buffer: wgpu::Buffer,
+    label: &'static str,
+    usage: wgpu::BufferUsages,
+}
+
+impl Storage {
+    fn new(gpu: &Gpu, label: &'static str, usage: wgpu::BufferUsages, bytes: u64) -> Self {
+        let usage = usage | wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+        Self {
+            buffer: make(gpu, label, usage, bytes),
+            label,
+            usage,
+        }
+    }
+
+    /// Makes room for `bytes` (contents are not kept).
+    fn reserve(&mut self, gpu: &Gpu, bytes: u64) {
+        if bytes > self.buffer.size() {
+            self.buffer = make(gpu, self.label, self.usage, bytes.next_power_of_two());
+        }
+    }
+}
+
+fn make(gpu: &Gpu, label: &str, usage: wgpu::BufferUsages, bytes: u64) -> wgpu::Buffer {
+    gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: bytes.max(256).next_multiple_of(256),
+        usage,
+        mapped_at_creation: false,
+    })
+}
+
+impl Cull {
+    pub fn new(gpu: &Gpu, bounds: &[SpeciesBounds], max_binding: u64) -> Result<Self, RenderError> {
+        if bounds.len() > MAX_SPECIES {
+            return Err(RenderError::Option(format!(
+                "{} species: the GPU cull holds at most {MAX_SPECIES} — merge species that share a plant",
+                bounds.len()
+            )));
+        }
+        let device = &gpu.device;
+        use sylvan_gpu::layout;
+        let c = wgpu::ShaderStages::COMPUTE;
+        let rw = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: c,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: false },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("cull_layout"),
+            entries: &[
+                layout::uniform(0, c),
+                layout::storage(1, c),
+                layout::storage(2, c),
+                layout::storage(3, c),
+                rw(4),
+                rw(5),
+                layout::storage(6, c),
+                rw(7),
+            ],
+        });
+        let module = sylvan_gpu::shader(gpu, "cull", include_str!("cull.wgsl"));
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("cull_pipeline_layout"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let compute = |entry: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        let mut species_spheres = [[0.0; 4]; MAX_SPECIES];
+        for (s, b) in species_spheres.iter_mut().zip(bounds) {
+            let c = (b.min + b.max) * 0.5;
+            *s = [c.x, c.y, c.z, (b.max - b.min).length() * 0.5];
+        }
+        let n_lists = PASSES * bounds.len().max(1);
+        let u = wgpu::BufferUsages::empty();
+        Ok(Self {
+            cull: compute("cull"),
+            args_pipeline: compute("write_args"),
+            layout,
+            params: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("cull_params"),
+                size: std::mem::size_of::<GpuParams>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            species_spheres,
+            species: bounds.len(),
+            pages: Storage::new(gpu, "cull_pages", u, 4096),
+            lists: Storage::new(gpu, "cull_lists", u, n_lists as u64 * 8),
+            counters: Storage::new(
+                gpu,
+                "cull_counters",
+                wgpu::BufferUsages::COPY_SRC,
+                n_lists as u64 * 4,
+            ),
+            trees: Storage::new(gpu, "cull_lists_trees", wgpu::BufferUsages::VERTEX, 1 << 16),
+            draws: Storage::new(gpu, "cull_draws", u, 256),
+            args: Storage::new(gpu, "cull_args", wgpu::BufferUsages::INDIRECT, 256),
+            readback: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("cull_readback"),
+                size: (n_lists as u64 * 4).next_multiple_of(256),
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            readback_len: n_lists,
+            offsets: vec![0; n_lists],
+            capacity: vec![0; n_lists],
+            listed: vec![0; n_lists],
+            draws_per_pass: 0,
+            max_binding,
+        })
+    }
+
+    /// GPU bytes.
+    pub fn bytes(&self) -> u64 {
+        [
+            &self.pages,
+            &self.lists,
+            &self.counters,
+            &self.trees,
+            &self.draws,
+            &self.args,
+        ]
+        .iter()
+        .map(|s| s.buffer.size())
+        .sum::<u64>()
+            + self.readback.size()
+            + self.params.size()
+    }
+
+    pub fn culled(&self) -> Culled<'_> {
+        Culled {
+            trees: &self.trees.buffer,
+            args: &self.args.buffer,
+            offsets: &self.offsets,
+            capacity: &self.capacity,
+            listed: &self.listed,
+            species: self.species,
+            draws_per_pass: self.draws_per_pass,
+        }
+    }
+
+    pub fn listed(&self) -> &[u32] {
+        &self.listed
+    }
+
+    /// Uploads the frame's tables and records the two dispatches and the counts' copy.
+    pub fn record(
+        &mut self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        pool: &wgpu::Buffer,
+        f: &FrameCull<'_>,
+    ) -> Result<(), RenderError> {
+        // List layout: (pass, species) lists back to back, each as long as the trees of the
+        // tiles that pass sees; what does not fit one storage binding is cut (and counted).
+        let limit = (self.max_binding / TREE_BYTES) as u32;
+        let mut at = 0u32;
+        for (i, &cap) in f.capacity.iter().enumerate() {
+            let cap = cap.min(limit - at);
+            self.offsets[i] = at;
+            self.capacity[i] = cap;
+            at += cap;
+        }
+        let lists: Vec<GpuList> = self
+            .offsets
+            .iter()
+            .zip(&self.capacity)
+            .map(|(&offset, &capacity)| GpuList { offset, capacity })
+            .collect();
+        self.draws_per_pass = f.draws.len();
+        let species = self.species;
+        let draws: Vec<GpuDraw> = (0..PASSES)
+            .flat_map(|p| {
+                f.draws.iter().map(move |d| GpuDraw {
+                    list: (p * species) as u32 + d.species,
+                    index_count: d.index_count,
+                    first_index: d.first_index,
+                    _pad: 0,
+                })
+            })
+            .collect();
+        self.trees.reserve(gpu, at as u64 * TREE_BYTES);
+        self.pages
+            .reserve(gpu, std::mem::size_of_val(f.pages) as u64);
+        self.draws
+            .reserve(gpu, std::mem::size_of_val(draws.as_slice()) as u64);
+        self.args.reserve(gpu, draws.len() as u64 * 20);
+        let mut params = GpuParams {
+            planes: [[0.0; 4]; 6 * PASSES],
+            eye_far: [f.eye.x, f.eye.y, f.eye.z, f.far],
+            info: [
+                self.species as u32,
+                f.pages.len() as u32,
+                draws.len() as u32,
+                0,
+            ],
+            fade: [f.fade_start, 0.0, 0.0, 0.0],
+            species: self.species_spheres,
+        };
+        for (p, frustum) in f.frustums.iter().enumerate() {
+            if let Some(fr) = frustum {
+                params.info[3] |= 1 << p;
+                for (k, plane) in fr.planes().iter().enumerate() {
+                    params.planes[p * 6 + k] = plane.to_array();
+                }
+            }
+        }
+        let q = &gpu.queue;
+        q.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        if !f.pages.is_empty() {
+            q.write_buffer(&self.pages.buffer, 0, bytemuck::cast_slice(f.pages));
+        }
+        q.write_buffer(&self.lists.buffer, 0, bytemuck::cast_slice(&lists));
+        if !draws.is_empty() {
+            q.write_buffer(&self.draws.buffer, 0, bytemuck::cast_slice(&draws));
+        }
+        let bind = crate::technique::common::bind_group(
+            gpu,
+            "cull_bind",
+            &self.layout,
+            &[
+                self.params.as_entire_binding(),
+                pool.as_entire_binding(),
+                self.pages.buffer.as_entire_binding(),
+                self.lists.buffer.as_entire_binding(),
+                self.counters.buffer.as_entire_binding(),
+                self.trees.buffer.as_entire_binding(),
+                self.draws.buffer.as_entire_binding(),
+                self.args.buffer.as_entire_binding(),
+            ],
+        );
+        encoder.clear_buffer(&self.counters.buffer, 0, None);
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("cull"),
+                timestamp_writes: None,
+            });
+            pass.set_bind_group(0, &bind, &[]);
+            if !f.pages.is_empty() {
+                pass.set_pipeline(&self.cull);
+                // One workgroup row per page: the pool's binding limit keeps pages far below
+                // the 65,535 rows a dispatch allows (16.7M trees).
+                pass.dispatch_workgroups(super::PAGE / 64, f.pages.len() as u32, 1);
+            }
+            if !draws.is_empty() {
+                pass.set_pipeline(&self.args_pipeline);
+                pass.dispatch_workgroups((draws.len() as u32).div_ceil(64), 1, 1);
+            }
+        }
+        let bytes = (self.readback_len * 4) as u64;
+        encoder.copy_buffer_to_buffer(&self.counters.buffer, 0, &self.readback, 0, bytes);
+        Ok(())
+    }
+
+    /// The lists' counts and capacities of the frame just completed (blocks until mapped:
+    /// call once the frame's work is done, as the renderer does after its timer).
+    pub fn read_counts(&mut self, gpu: &Gpu) -> Result<Vec<(u32, u32)>, RenderError> {
+        let slice = self.readback.slice(..(self.readback_len * 4) as u64);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        gpu.wait()?;
+        rx.recv()
+            .map_err(|_| RenderError::Option("cull counts: map callback dropped".into()))?
+            .map_err(|e| RenderError::Option(format!("cull counts: {e}")))?;
+        let counts: Vec<u32> = {
+            let data = slice
+                .get_mapped_range()
+                .map_err(|e| RenderError::Option(format!("cull counts: {e}")))?;
+            bytemuck::cast_slice(&data).to_vec()
+        };
+        self.readback.unmap();
+        for (l, (&n, &cap)) in self
+            .listed
+            .iter_mut()
+            .zip(counts.iter().zip(&self.capacity))
+        {
+            *l = n.min(cap);
+        }
+        Ok(counts
+            .into_iter()
+            .zip(self.capacity.iter().copied())
+            .collect())
+    }
+}
+
+const _: () = assert!(std::mem::size_of::<PoolTree>() == 32);

@@ -1,0 +1,489 @@
+//! The tiled world and the GPU-driven frame (#15): the terrain is split into square tiles; a
+//! tile's trees are produced on worker threads when it first comes within range (view or
+//! shadow, plus a prefetch ring), kept in one GPU pool of fixed-size pages under a memory
+//! budget, and evicted, farthest first, when the budget is exceeded. Per frame the CPU culls
+//! *tiles* against the camera and each cascade and lays out one instance list per (pass,
+//! species); a compute pass culls the *trees* of those tiles, appends the survivors to their
+//! lists and writes indirect draw arguments. Nothing per frame is per tree on the CPU, and
+//! nothing at start or per frame depends on the size of the world — only on the tiles in range.
+//!
+//! This is the producer/cache design of BN12 §4 (and Proland's tile producers) applied to tree
+//! instances. Deviations and limits:
+//! - the grid is flat (one level): quadtree levels come with coverage tiles (BN12 shader-maps);
+//! - tiles are culled on the CPU (a few hundred per frame), trees on the GPU;
+//! - occlusion culling against a depth pyramid is not done;
+//! - the pool and the lists are each one storage binding, so at most
+//!   `max_storage_buffer_binding_size / 32` trees (4.2M on a 128 MiB limit) are resident or
+//!   listed at once — a frame needing more lists only what fits and counts the rest
+//!   (`trees_dropped`).
+
+mod cull;
+mod produce;
+
+pub use cull::{Culled, IndirectDraw};
+
+use crate::RenderError;
+use crate::frame::{CASCADES, Frustum};
+use crate::instances::SpeciesBounds;
+use bytemuck::{Pod, Zeroable};
+use glam::{Vec2, Vec3};
+use produce::{Producer, Source, TileTrees};
+use std::collections::HashMap;
+use sylvan_gpu::Gpu;
+use sylvan_scene::Scene;
+
+/// Trees per pool page (the unit tiles are allocated in; a multiple of the cull workgroup).
+pub const PAGE: u32 = 256;
+/// Passes the lists serve: the camera and each cascade.
+pub const PASSES: usize = 1 + CASCADES;
+/// Trees fade out over the last 10 % of a finite `[world] tree_distance_m` (their presence,
+/// as the level-of-detail cross-fades), so none pops at the edge.
+pub const TREE_DISTANCE_FADE: f32 = 0.1;
+
+/// A tile of the world grid: tile (x, z) covers `[x, x+1) × [z, z+1)` times the tile size.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, PartialOrd, Ord)]
+pub struct TileKey {
+    /// Column (along X).
+    pub x: i32,
+    /// Row (along Z).
+    pub z: i32,
+}
+
+impl TileKey {
+    /// The tile holding world point (x, z).
+    pub fn of(x: f32, z: f32, tile_m: f32) -> Self {
+        Self {
+            x: (x / tile_m).floor() as i32,
+            z: (z / tile_m).floor() as i32,
+        }
+    }
+
+    /// Horizontal distance from `p` (x, z) to the tile's square.
+    fn distance(self, p: Vec2, tile_m: f32) -> f32 {
+        let min = Vec2::new(self.x as f32, self.z as f32) * tile_m;
+        let max = min + Vec2::splat(tile_m);
+        (p.clamp(min, max) - p).length()
+    }
+}
+
+/// One tree in the pool: the instance as the vertex shaders read it, with the species in
+/// `rot.w`'s bits (the cull shader writes the presence there in the lists).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable, Debug, PartialEq)]
+pub(crate) struct PoolTree {
+    pub base_scale: [f32; 4],
+    pub rot: [f32; 4],
+}
+
+const TREE_BYTES: u64 = std::mem::size_of::<PoolTree>() as u64;
+
+struct Resident {
+    pages: Vec<u32>,
+    count: u32,
+    species_counts: Vec<u32>,
+    min: Vec3,
+    max: Vec3,
+}
+
+/// Per frame: where the camera is and which passes draw.
+pub(crate) struct WorldView<'a> {
+    /// Eye (world).
+    pub eye: Vec3,
+    /// The camera pass draws trees nearer than this (metres).
+    pub far: f32,
+    /// Per pass its frustum, `None` for a pass not drawn (shadows off).
+    pub frustums: &'a [Option<Frustum>; PASSES],
+}
+
+/// What the world did in the last frame.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct WorldStats {
+    /// Tiles resident in the pool.
+    pub tiles_resident: u32,
+    /// Tiles requested and not produced yet.
+    pub tiles_pending: u32,
+    /// Tiles produced this frame.
+    pub tiles_produced: u32,
+    /// Tiles the frame had to wait for (visible and missing).
+    pub tiles_waited: u32,
+    /// Tiles evicted this frame.
+    pub tiles_evicted: u32,
+    /// Trees resident in the pool.
+    pub trees_resident: u64,
+    /// Trees in the tiles the camera pass may see (the tree cull's input).
+    pub trees_considered: u64,
+    /// Trees drawn per pass (read back after the frame).
+    pub trees_drawn: [u32; PASSES],
+    /// Trees that passed the cull but did not fit a list.
+    pub trees_dropped: u32,
+    /// Pool and list bytes on the GPU.
+    pub gpu_bytes: u64,
+}
+
+impl WorldStats {
+    /// As named values (the `world` entry of the frame statistics).
+    pub fn named(&self) -> std::collections::BTreeMap<String, f64> {
+        let mut m = std::collections::BTreeMap::new();
+        for (k, v) in [
+            ("tiles_resident", self.tiles_resident as f64),
+            ("tiles_pending", self.tiles_pending as f64),
+            ("tiles_produced", self.tiles_produced as f64),
+            ("tiles_waited", self.tiles_waited as f64),
+            ("tiles_evicted", self.tiles_evicted as f64),
+            ("trees_resident", self.trees_resident as f64),
+            ("trees_considered", self.trees_considered as f64),
+            ("trees_drawn_camera", self.trees_drawn[0] as f64),
+            (
+                "trees_drawn_shadows",
+                self.trees_drawn[1..].iter().sum::<u32>() as f64,
+            ),
+            ("trees_dropped", self.trees_dropped as f64),
+            ("gpu_bytes", self.gpu_bytes as f64),
+        ] {
+            m.insert(k.to_string(), v);
+        }
+        m
+    }
+}
+
+/// The tiled world: tile cache, pool, and the GPU cull that fills the per-frame lists.
+pub struct World {
+    settings: sylvan_scene::World,
+    /// Tiles along X and Z.
+    tiles: [i32; 2],
+    producer: Producer,
+    resident: HashMap<TileKey, Resident>,
+    pool: wgpu::Buffer,
+    free_pages: Vec<u32>,
+    pool_pages: u32,
+    max_pool_pages: u32,
+    species: usize,
+    cull: cull::Cull,
+    stats: WorldStats,
+    budget_bytes: u64,
+}
+
+impl World {
+    /// A world over `scene`'s terrain and trees; starts the tile workers. Nothing is produced
+    /// until the first frame.
+    pub fn new(gpu: &Gpu, scene: &Scene, bounds: &[SpeciesBounds]) -> Result<Self, RenderError> {
+        let settings = scene.world;
+        let tile_m = settings.tile_m;
+        let tiles = scene
+            .terrain
+            .size
+            .map(|s| ((s / tile_m).ceil() as i32).max(1));
+        let threads = std::thread::available_parallelism()
+            .map_or(1, |n| n.get())
+            .saturating_sub(1)
+            .clamp(1, 8);
+        let source = Source::new(
+            scene.terrain.clone(),
+            scene.seeded.clone(),
+            &scene.trees,
+            bounds.to_vec(),
+            tile_m,
+        );
+        let limits = gpu.device.limits();
+        let binding = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size);
+        let max_pool_pages = (binding / (TREE_BYTES * PAGE as u64)) as u32;
+        let pool_pages = 64.min(max_pool_pages);
+        let pool = pool_buffer(gpu, pool_pages);
+        let cull = cull::Cull::new(gpu, bounds, binding)?;
+        Ok(Self {
+            budget_bytes: settings.cache_mib as u64 * (1 << 20),
+            settings,
+            tiles,
+            producer: Producer::new(source, threads),
+            resident: HashMap::new(),
+            free_pages: (0..pool_pages).rev().collect(),
+            pool,
+            pool_pages,
+            max_pool_pages,
+            species: bounds.len(),
+            cull,
+            stats: WorldStats::default(),
+        })
+    }
+
+    /// Last frame's statistics.
+    pub fn stats(&self) -> WorldStats {
+        self.stats
+    }
+
+    /// The lists and draw arguments of the last [`World::prepare`], for the techniques' draws.
+    pub(crate) fn culled(&self) -> Culled<'_> {
+        self.cull.culled()
+    }
+
+    /// GPU bytes held (pool, lists, arguments).
+    pub fn bytes(&self) -> u64 {
+        self.pool.size() + self.cull.bytes()
+    }
+
+    /// Tiles within `range` of `eye` (horizontal), nearest first, with their distances.
+    fn tiles_within(&self, eye: Vec2, range: f32) -> Vec<(f32, TileKey)> {
+        let t = self.settings.tile_m;
+        let reach = |v: f32| ((v / t).floor() as i32).clamp(0, i32::MAX);
+        let r = range.min(1e9);
+        let lo = [reach(eye.x - r), reach(eye.y - r)];
+        let hi = [
+            (((eye.x + r) / t).floor() as i32).min(self.tiles[0] - 1),
+            (((eye.y + r) / t).floor() as i32).min(self.tiles[1] - 1),
+        ];
+        let mut out = Vec::new();
+        for z in lo[1]..=hi[1] {
+            for x in lo[0]..=hi[0] {
+                let key = TileKey { x, z };
+                let d = key.distance(eye, t);
+                if d <= range {
+                    out.push((d, key));
+                }
+            }
+        }
+        out.sort_by(|a, b| a.0.total_cmp(&b.0));
+        out
+    }
+
+    /// Per frame: requests, receives, waits for and evicts tiles, then records the cull of
+    /// every tree in the tiles each pass may see into `encoder`, and the indirect arguments of
+    /// `draws` (per pass).
+    pub(crate) fn prepare(
+        &mut self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        view: &WorldView<'_>,
+        draws: &[IndirectDraw],
+    ) -> Result<(), RenderError> {
+        let eye = Vec2::new(view.eye.x, view.eye.z);
+        let range = self.settings.tree_distance_m.min(view.far);
+        let mut stats = WorldStats::default();
+        // 1. Ask for every tile within range plus the ring, nearest first; forget the rest.
+        let wanted = self.tiles_within(eye, range + self.settings.prefetch_m);
+        for &(d, key) in &wanted {
+            if !self.resident.contains_key(&key) {
+                self.producer.request(key, d);
+            }
+        }
+        let wanted_set: std::collections::HashSet<TileKey> = wanted.iter().map(|w| w.1).collect();
+        self.producer.cancel(|k| wanted_set.contains(&k));
+        // 2. What arrived; then wait for tiles in range that a drawn pass sees.
+        let mut arrived = self.producer.finished();
+        let needed: Vec<(f32, TileKey)> = wanted.iter().filter(|w| w.0 <= range).copied().collect();
+        let must: Vec<TileKey> = needed
+            .iter()
+            .map(|w| w.1)
+            .filter(|&k| !self.resident.contains_key(&k) && !arrived.iter().any(|a| a.key == k))
+            .filter(|&k| self.tile_may_be_seen(k, view))
+            .collect();
+        stats.tiles_waited = must.len() as u32;
+        if !must.is_empty() {
+            arrived.extend(self.producer.wait_for(&must));
+        }
+        stats.tiles_produced = arrived.len() as u32;
+        for tile in arrived {
+            if wanted_set.contains(&tile.key) {
+                self.insert(gpu, tile)?;
+            }
+        }
+        // 3. Over budget: evict the farthest tiles not in range.
+        stats.tiles_evicted = self.evict(eye, range);
+        // 4. Tiles per pass → pages and list capacities; the GPU culls the trees.
+        let mut pages = Vec::new();
+        let mut capacity = vec![0u32; PASSES * self.species];
+        for &(_, key) in &needed {
+            let Some(r) = self.resident.get(&key) else {
+                continue;
+            };
+            let mut mask = 0u32;
+            for (p, f) in view.frustums.iter().enumerate() {
+                let Some(f) = f else { continue };
+                if f.intersects_box(r.min, r.max)
+                    && (p > 0 || box_distance(view.eye, r.min, r.max) < range)
+                {
+                    mask |= 1 << p;
+                    for (s, &n) in r.species_counts.iter().enumerate() {
+                        capacity[p * self.species + s] += n;
+                    }
+                }
+            }
+            if mask == 0 {
+                continue;
+            }
+            if mask & 1 != 0 {
+                stats.trees_considered += r.count as u64;
+            }
+            for (i, &page) in r.pages.iter().enumerate() {
+                let first = i as u32 * PAGE;
+                pages.push(cull::GpuPage {
+                    first: page * PAGE,
+                    count: (r.count - first).min(PAGE),
+                    passes: mask,
+                    _pad: 0,
+                });
+            }
+        }
+        self.cull.record(
+            gpu,
+            encoder,
+            &self.pool,
+            &cull::FrameCull {
+                eye: view.eye,
+                far: range,
+                fade_start: if self.settings.tree_distance_m.is_finite() {
+                    range * (1.0 - TREE_DISTANCE_FADE)
+                } else {
+                    f32::INFINITY
+                },
+                frustums: view.frustums,
+                pages: &pages,
+                capacity: &capacity,
+                draws,
+            },
+        )?;
+        stats.tiles_resident = self.resident.len() as u32;
+        stats.tiles_pending = self.producer.pending() as u32;
+        stats.trees_resident = self.resident.values().map(|r| r.count as u64).sum();
+        stats.gpu_bytes = self.bytes();
+        self.stats = stats;
+        Ok(())
+    }
+
+    /// After the frame's submission has completed: reads the lists' counts back.
+    pub(crate) fn finish_frame(&mut self, gpu: &Gpu) -> Result<(), RenderError> {
+        let counts = self.cull.read_counts(gpu)?;
+        self.stats.trees_drawn = [0; PASSES];
+        self.stats.trees_dropped = 0;
+        for (i, &(n, cap)) in counts.iter().enumerate() {
+            self.stats.trees_drawn[i / self.species.max(1)] += n.min(cap);
+            self.stats.trees_dropped += n.saturating_sub(cap);
+        }
+        Ok(())
+    }
+
+    /// Trees listed per (pass, species) in the last frame (after [`World::finish_frame`]).
+    pub(crate) fn listed(&self) -> &[u32] {
+        self.cull.listed()
+    }
+
+    fn tile_may_be_seen(&self, key: TileKey, view: &WorldView<'_>) -> bool {
+        // The tile's column, from below the lowest terrain to above the tallest tree: a
+        // conservative box until its trees are known.
+        let t = self.settings.tile_m;
+        let min = Vec3::new(key.x as f32 * t, -1e5, key.z as f32 * t) - Vec3::splat(50.0);
+        let max =
+            Vec3::new((key.x + 1) as f32 * t, 1e5, (key.z + 1) as f32 * t) + Vec3::splat(50.0);
+        view.frustums
+            .iter()
+            .flatten()
+            .any(|f| f.intersects_box(min, max))
+    }
+
+    fn insert(&mut self, gpu: &Gpu, tile: TileTrees) -> Result<(), RenderError> {
+        if self.resident.contains_key(&tile.key) {
+            return Ok(());
+        }
+        let n = tile.trees.len() as u32;
+        let need = n.div_ceil(PAGE) as usize;
+        while self.free_pages.len() < need {
+            self.grow_pool(gpu, need)?;
+        }
+        let pages: Vec<u32> = (0..need)
+            .map(|_| self.free_pages.pop().expect("enough pages"))
+            .collect();
+        for (i, &page) in pages.iter().enumerate() {
+            let chunk = &tile.trees[i * PAGE as usize..((i + 1) * PAGE as usize).min(n as usize)];
+            gpu.queue.write_buffer(
+                &self.pool,
+                page as u64 * PAGE as u64 * TREE_BYTES,
+                bytemuck::cast_slice(chunk),
+            );
+        }
+        self.resident.insert(
+            tile.key,
+            Resident {
+                pages,
+                count: n,
+                species_counts: tile.species_counts,
+                min: tile.min,
+                max: tile.max,
+            },
+        );
+        Ok(())
+    }
+
+    /// Doubles the pool (or more, for `need` free pages), copying what it holds.
+    fn grow_pool(&mut self, gpu: &Gpu, need: usize) -> Result<(), RenderError> {
+        let want = (self.pool_pages * 2).max(self.pool_pages + need as u32);
+        let pages = want.min(self.max_pool_pages);
+        if pages <= self.pool_pages {
+            return Err(RenderError::Gpu(sylvan_gpu::GpuError::Limit {
+                what: "tree pool (trees resident at once)".into(),
+                needed: (self.pool_pages as u64 + need as u64) * PAGE as u64 * TREE_BYTES,
+                limit: self.max_pool_pages as u64 * PAGE as u64 * TREE_BYTES,
+                fix: "lower [world] tree_distance_m or the density".into(),
+            }));
+        }
+        let bigger = pool_buffer(gpu, pages);
+        let mut enc = gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("pool_grow"),
+            });
+        enc.copy_buffer_to_buffer(&self.pool, 0, &bigger, 0, self.pool.size());
+        // Submitted now: writes queued before it land in the old pool and are copied; later
+        // writes go to the new one.
+        gpu.queue.submit([enc.finish()]);
+        self.free_pages.extend((self.pool_pages..pages).rev());
+        self.pool = bigger;
+        self.pool_pages = pages;
+        Ok(())
+    }
+
+    fn resident_bytes(&self) -> u64 {
+        (self.pool_pages - self.free_pages.len() as u32) as u64 * PAGE as u64 * TREE_BYTES
+    }
+
+    fn evict(&mut self, eye: Vec2, range: f32) -> u32 {
+        if self.resident_bytes() <= self.budget_bytes {
+            return 0;
+        }
+        let t = self.settings.tile_m;
+        let mut far: Vec<(f32, TileKey)> = self
+            .resident
+            .keys()
+            .map(|&k| (k.distance(eye, t), k))
+            .filter(|&(d, _)| d > range)
+            .collect();
+        far.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let mut evicted = 0;
+        for (_, key) in far {
+            if self.resident_bytes() <= self.budget_bytes {
+                break;
+            }
+            if let Some(r) = self.resident.remove(&key) {
+                self.free_pages.extend(r.pages);
+                evicted += 1;
+            }
+        }
+        evicted
+    }
+}
+
+fn pool_buffer(gpu: &Gpu, pages: u32) -> wgpu::Buffer {
+    gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("tree_pool"),
+        size: (pages.max(1) as u64) * PAGE as u64 * TREE_BYTES,
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_DST
+            | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    })
+}
+
+/// Distance from `p` to the box (0 inside).
+fn box_distance(p: Vec3, min: Vec3, max: Vec3) -> f32 {
+    (p.clamp(min, max) - p).length()
+}

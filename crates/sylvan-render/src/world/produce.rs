@@ -1,0 +1,257 @@
+//! Tile production on worker threads: a tile's trees from the scene's placed trees (binned by
+//! tile once, at start) and its seeded forest, turned into GPU records. Jobs are taken nearest
+//! first; the render thread can run jobs itself while it waits for a tile it must have.
+
+use super::{PoolTree, TileKey};
+use crate::instances::{SpeciesBounds, tint_seed};
+use glam::{Vec2, Vec3};
+use std::collections::{HashMap, HashSet};
+use std::sync::mpsc::{Receiver, Sender, channel};
+use std::sync::{Arc, Condvar, Mutex};
+use std::thread::JoinHandle;
+use sylvan_scene::{SeededForest, Terrain, TreeInstance};
+
+/// A produced tile: its trees as GPU records and what culling needs to know of them.
+pub(crate) struct TileTrees {
+    pub key: TileKey,
+    pub trees: Vec<PoolTree>,
+    /// Trees per species.
+    pub species_counts: Vec<u32>,
+    /// World bounds of every tree's sphere (empty tile: min > max).
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+/// What every worker reads: immutable for the renderer's life.
+pub(crate) struct Source {
+    pub terrain: Terrain,
+    pub seeded: Option<Arc<SeededForest>>,
+    /// Placed trees (positions files, `poisson` placement) by tile.
+    pub placed: HashMap<TileKey, Vec<TreeInstance>>,
+    pub bounds: Vec<SpeciesBounds>,
+    pub tile_m: f32,
+}
+
+impl Source {
+    /// Bins `placed` by tile (time ∝ the placed trees, which the scene already holds).
+    pub fn new(
+        terrain: Terrain,
+        seeded: Option<Arc<SeededForest>>,
+        placed: &[TreeInstance],
+        bounds: Vec<SpeciesBounds>,
+        tile_m: f32,
+    ) -> Self {
+        let mut bins: HashMap<TileKey, Vec<TreeInstance>> = HashMap::new();
+        for t in placed {
+            bins.entry(TileKey::of(t.position.x, t.position.z, tile_m))
+                .or_default()
+                .push(*t);
+        }
+        Self {
+            terrain,
+            seeded,
+            placed: bins,
+            bounds,
+            tile_m,
+        }
+    }
+
+    /// Produces one tile (deterministic: the same records in the same order every time).
+    pub fn produce(&self, key: TileKey) -> TileTrees {
+        let min = Vec2::new(key.x as f32, key.z as f32) * self.tile_m;
+        let max = min + Vec2::splat(self.tile_m);
+        let mut trees: Vec<TreeInstance> = self.placed.get(&key).cloned().unwrap_or_default();
+        if let Some(forest) = &self.seeded {
+            forest.produce(&self.terrain, min, max, &mut trees);
+        }
+        let mut out = TileTrees {
+            key,
+            trees: Vec::with_capacity(trees.len()),
+            species_counts: vec![0; self.bounds.len()],
+            min: Vec3::splat(f32::MAX),
+            max: Vec3::splat(f32::MIN),
+        };
+        for t in &trees {
+            let Some(b) = self.bounds.get(t.species as usize) else {
+                continue;
+            };
+            let rec = PoolTree::new(t, b);
+            let (c, r) = sphere(t, b);
+            out.min = out.min.min(c - r);
+            out.max = out.max.max(c + r);
+            out.species_counts[t.species as usize] += 1;
+            out.trees.push(rec);
+        }
+        out
+    }
+}
+
+/// A tree's world bounding sphere (centre, radius), as [`crate::instances::Instances`] and the
+/// cull shader compute it.
+fn sphere(t: &TreeInstance, b: &SpeciesBounds) -> (Vec3, f32) {
+    let scale = t.height / b.max.y.max(1e-3);
+    let local_centre = (b.min + b.max) * 0.5 * scale;
+    let radius = (b.max - b.min).length() * 0.5 * scale;
+    let (s, c) = t.rotation.sin_cos();
+    let centre = t.position
+        + Vec3::new(
+            c * local_centre.x + s * local_centre.z,
+            local_centre.y,
+            -s * local_centre.x + c * local_centre.z,
+        );
+    (centre, radius)
+}
+
+impl PoolTree {
+    /// The record of tree `t` of a species with model bounds `b` (scaled from plant height to
+    /// tree height, as [`crate::instances::Instances`] places it).
+    pub(crate) fn new(t: &TreeInstance, b: &SpeciesBounds) -> Self {
+        let scale = t.height / b.max.y.max(1e-3);
+        let (s, c) = t.rotation.sin_cos();
+        Self {
+            base_scale: [t.position.x, t.position.y, t.position.z, scale],
+            rot: [c, s, tint_seed(t.seed), f32::from_bits(t.species)],
+        }
+    }
+}
+
+#[derive(Default)]
+struct Queue {
+    /// Jobs waiting, with their priority (lower first).
+    waiting: Vec<(f32, TileKey)>,
+    stop: bool,
+}
+
+/// Worker threads producing tiles, nearest first.
+pub(crate) struct Producer {
+    source: Arc<Source>,
+    queue: Arc<(Mutex<Queue>, Condvar)>,
+    done_tx: Sender<TileTrees>,
+    done: Receiver<TileTrees>,
+    /// Requested and not yet received.
+    pending: HashSet<TileKey>,
+    workers: Vec<JoinHandle<()>>,
+}
+
+impl Producer {
+    /// Starts `threads` workers over `source` (0: the render thread produces everything).
+    pub fn new(source: Source, threads: usize) -> Self {
+        let source = Arc::new(source);
+        let queue = Arc::new((Mutex::new(Queue::default()), Condvar::new()));
+        let (done_tx, done) = channel();
+        let workers = (0..threads)
+            .map(|i| {
+                let (source, queue, tx) = (source.clone(), queue.clone(), done_tx.clone());
+                std::thread::Builder::new()
+                    .name(format!("sylvan-tiles-{i}"))
+                    .spawn(move || worker(&source, &queue, &tx))
+                    .expect("spawning a tile worker")
+            })
+            .collect();
+        Self {
+            source,
+            queue,
+            done_tx,
+            done,
+            pending: HashSet::new(),
+            workers,
+        }
+    }
+
+    /// Tiles requested and not yet received.
+    pub fn pending(&self) -> usize {
+        self.pending.len()
+    }
+
+    /// Asks for `key` with `priority` (lower first); re-asking updates the priority.
+    pub fn request(&mut self, key: TileKey, priority: f32) {
+        let mut q = self.queue.0.lock().expect("tile queue");
+        if self.pending.insert(key) {
+            q.waiting.push((priority, key));
+            self.queue.1.notify_one();
+        } else if let Some(job) = q.waiting.iter_mut().find(|j| j.1 == key) {
+            job.0 = priority;
+        }
+    }
+
+    /// Drops requests for tiles no longer wanted (not yet started).
+    pub fn cancel(&mut self, keep: impl Fn(TileKey) -> bool) {
+        let mut q = self.queue.0.lock().expect("tile queue");
+        let pending = &mut self.pending;
+        q.waiting.retain(|&(_, k)| {
+            let kept = keep(k);
+            if !kept {
+                pending.remove(&k);
+            }
+            kept
+        });
+    }
+
+    /// Tiles finished since the last call, without waiting.
+    pub fn finished(&mut self) -> Vec<TileTrees> {
+        let out: Vec<TileTrees> = self.done.try_iter().collect();
+        for t in &out {
+            self.pending.remove(&t.key);
+        }
+        out
+    }
+
+    /// Waits until none of `keys` is pending, producing waiting jobs on this thread meanwhile;
+    /// returns every tile finished meanwhile.
+    pub fn wait_for(&mut self, keys: &[TileKey]) -> Vec<TileTrees> {
+        let mut out = Vec::new();
+        while keys.iter().any(|k| self.pending.contains(k)) {
+            // Run a wanted job here if it has not started; else wait for a worker.
+            let job = {
+                let mut q = self.queue.0.lock().expect("tile queue");
+                let at = q.waiting.iter().position(|j| keys.contains(&j.1));
+                at.map(|i| q.waiting.swap_remove(i).1)
+            };
+            let tile = match job {
+                Some(key) => self.source.produce(key),
+                None => match self.done.recv() {
+                    Ok(t) => t,
+                    Err(_) => break,
+                },
+            };
+            self.pending.remove(&tile.key);
+            out.push(tile);
+        }
+        out.extend(self.finished());
+        out
+    }
+}
+
+impl Drop for Producer {
+    fn drop(&mut self) {
+        self.queue.0.lock().expect("tile queue").stop = true;
+        self.queue.1.notify_all();
+        for w in self.workers.drain(..) {
+            let _ = w.join();
+        }
+        let _ = &self.done_tx;
+    }
+}
+
+fn worker(source: &Source, queue: &(Mutex<Queue>, Condvar), tx: &Sender<TileTrees>) {
+    loop {
+        let key = {
+            let mut q = queue.0.lock().expect("tile queue");
+            loop {
+                if q.stop {
+                    return;
+                }
+                if !q.waiting.is_empty() {
+                    let best = (0..q.waiting.len())
+                        .min_by(|&a, &b| q.waiting[a].0.total_cmp(&q.waiting[b].0))
+                        .expect("not empty");
+                    break q.waiting.swap_remove(best).1;
+                }
+                q = queue.1.wait(q).expect("tile queue");
+            }
+        };
+        if tx.send(source.produce(key)).is_err() {
+            return;
+        }
+    }
+}
