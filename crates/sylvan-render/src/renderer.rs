@@ -226,10 +226,11 @@ impl Renderer {
             .collect();
         let entry = registry::find(&options.technique)?;
         // A GPU-driven technique draws the world tile by tile; any other gets every tree now.
-        let (world, trees) = if entry.gpu_driven && !options.cpu_driven {
-            (Some(World::new(gpu, scene, &bounds)?), Vec::new())
+        let gpu_driven = entry.gpu_driven && !options.cpu_driven;
+        let trees = if gpu_driven {
+            Vec::new()
         } else {
-            let trees = scene.all_trees().map_err(|e| {
+            scene.all_trees().map_err(|e| {
                 RenderError::Option(format!(
                     "{e}: technique `{}` places every tree before the first frame — lower the density, or use a GPU-driven technique ({})",
                     options.technique,
@@ -240,8 +241,7 @@ impl Renderer {
                         .collect::<Vec<_>>()
                         .join(", ")
                 ))
-            })?;
-            (None, trees)
+            })?
         };
         let instances = Instances::new(gpu, &trees, &bounds);
         let settings: Vec<Setting> = scene
@@ -277,6 +277,10 @@ impl Renderer {
             f32::max,
         );
         let indirect = technique.indirect_draws();
+        let world = match gpu_driven {
+            true => Some(World::new(gpu, scene, &bounds, technique.list_layout())?),
+            false => None,
+        };
         let renderer = Self {
             sky: SkyPass::new(gpu, &frame),
             terrain: TerrainPass::new(gpu, &frame, t),
@@ -510,15 +514,11 @@ impl Renderer {
         if let Some(world) = &mut self.world {
             // The frame is done (the timer waited): its counts are ready without a stall.
             world.finish_frame(gpu)?;
-            let listed = world.listed();
-            let species = self.instances.species_count().max(1);
+            let world = &*world;
             let tris = |pass: usize| -> u64 {
                 self.indirect
                     .iter()
-                    .map(|d| {
-                        listed[pass * species + d.species as usize] as u64
-                            * (d.index_count / 3) as u64
-                    })
+                    .map(|d| world.listed(pass, d.group as usize) as u64 * d.triangles())
                     .sum()
             };
             main_counts.triangles = self.terrain.triangles() + tris(0);

@@ -45,6 +45,7 @@ fn forest_scene(size: f32, per_ha: f32, world: sylvan_scene::World) -> sylvan_sc
 fn frame(
     gpu: &sylvan_gpu::Gpu,
     s: &sylvan_scene::Scene,
+    technique: &str,
     cpu_driven: bool,
 ) -> (image::RgbImage, sylvan_render::FrameStats) {
     let options = RenderOptions {
@@ -52,6 +53,8 @@ fn frame(
         height: 128,
         shadow_resolution: 512,
         cpu_driven,
+        technique: technique.into(),
+        cache: sylvan_render::bake::CachePolicy::Off,
         ..Default::default()
     };
     let mut r = Renderer::new(gpu, s, &[test_tree()], &options).expect("renderer");
@@ -60,6 +63,9 @@ fn frame(
     (img, stats)
 }
 
+/// Every GPU-driven technique: the same trees, triangles and picture as from the CPU lists
+/// (geometry: other orders, equal up to depth ties; octahedral: the camera list sorted back to
+/// front by distance buckets instead of exactly).
 #[test]
 fn gpu_cull_draws_what_the_cpu_lists_drew() {
     let gpu = gpu();
@@ -68,18 +74,26 @@ fn gpu_cull_draws_what_the_cpu_lists_drew() {
         ..Default::default()
     };
     let s = forest_scene(300.0, 60.0, world);
-    let (cpu, cpu_stats) = frame(&gpu, &s, true);
-    let (gpu_img, gpu_stats) = frame(&gpu, &s, false);
-    assert!(cpu_stats.trees_drawn["geometry"] > 50);
-    assert_eq!(gpu_stats.trees_drawn, cpu_stats.trees_drawn);
-    assert_eq!(gpu_stats.triangles, cpu_stats.triangles);
-    assert_eq!(gpu_stats.shadow_triangles, cpu_stats.shadow_triangles);
-    let world = &gpu_stats.technique_stats["world"];
-    assert_eq!(world["tiles_resident"], 25.0, "5 × 5 tiles of 64 m");
-    assert_eq!(world["trees_resident"] as usize, cpu_stats.trees_total);
-    // Same trees in other orders: equal up to depth ties.
-    let f = sylvan_eval::flip(&cpu, &gpu_img).unwrap();
-    assert!(f.mean <= 0.005, "FLIP {}", f.mean);
+    for technique in sylvan_render::registry::REGISTRY
+        .iter()
+        .filter(|e| e.gpu_driven)
+        .map(|e| e.name)
+    {
+        let (cpu, cpu_stats) = frame(&gpu, &s, technique, true);
+        let (gpu_img, gpu_stats) = frame(&gpu, &s, technique, false);
+        assert!(cpu_stats.trees_drawn[technique] > 50, "{technique}");
+        assert_eq!(gpu_stats.trees_drawn, cpu_stats.trees_drawn, "{technique}");
+        assert_eq!(gpu_stats.triangles, cpu_stats.triangles, "{technique}");
+        assert_eq!(
+            gpu_stats.shadow_triangles, cpu_stats.shadow_triangles,
+            "{technique}"
+        );
+        let world = &gpu_stats.technique_stats["world"];
+        assert_eq!(world["tiles_resident"], 25.0, "5 × 5 tiles of 64 m");
+        assert_eq!(world["trees_resident"] as usize, cpu_stats.trees_total);
+        let f = sylvan_eval::flip(&cpu, &gpu_img).unwrap();
+        assert!(f.mean <= 0.005, "{technique}: FLIP {}", f.mean);
+    }
 }
 
 #[test]

@@ -176,6 +176,11 @@ pub trait Technique {
     fn indirect_draws(&self) -> Vec<crate::world::IndirectDraw> {
         Vec::new()
     }
+    /// How a GPU-driven technique wants its lists: per species (default), or one mixed list
+    /// per pass, the camera's sorted back to front.
+    fn list_layout(&self) -> crate::world::ListLayout {
+        crate::world::ListLayout::default()
+    }
 }
 
 /// What a technique may look at once per frame, before any pass is recorded.

@@ -14,16 +14,70 @@ use sylvan_gpu::Gpu;
 /// Most species the cull's uniform holds.
 pub const MAX_SPECIES: usize = 64;
 
-/// One draw a technique makes per (pass, species) list: the index range of one of the
-/// species' meshes, drawn once per listed tree.
+/// Distance buckets of the back-to-front counting sort (each 1/4096 of the log distance range:
+/// trees within ~0.25 % of each other's distance may swap).
+pub const SORT_BUCKETS: u32 = 4096;
+/// Nearest distance the sort tells apart (metres).
+const SORT_NEAR_M: f32 = 0.5;
+
+/// How a technique wants its trees listed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ListLayout {
+    /// One list per (pass, species); else one per pass holding every species, each record's
+    /// `rot.z` being species + tint seed.
+    pub per_species: bool,
+    /// The camera list sorted back to front (blended impostors; needs `per_species` off).
+    pub sort_camera: bool,
+}
+
+impl Default for ListLayout {
+    fn default() -> Self {
+        Self {
+            per_species: true,
+            sort_camera: false,
+        }
+    }
+}
+
+/// One draw a technique makes from each pass's list of a group (its species, or 0 for a
+/// mixed list): an index range drawn once per listed tree, or `vertices` non-indexed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct IndirectDraw {
-    /// The species whose list it draws.
-    pub species: u32,
-    /// Indices per instance.
+    /// The group whose list it draws.
+    pub group: u32,
+    /// Indices per instance (0: a non-indexed draw of `first_index` vertices).
     pub index_count: u32,
-    /// First index.
+    /// First index (vertices per instance when `index_count` is 0).
     pub first_index: u32,
+}
+
+impl IndirectDraw {
+    /// `count` indices from `first` per tree of group `group`.
+    pub fn indexed(group: u32, count: u32, first: u32) -> Self {
+        Self {
+            group,
+            index_count: count,
+            first_index: first,
+        }
+    }
+
+    /// `vertices` non-indexed vertices per tree of group `group`.
+    pub fn vertices(group: u32, vertices: u32) -> Self {
+        Self {
+            group,
+            index_count: 0,
+            first_index: vertices,
+        }
+    }
+
+    /// Triangles per tree.
+    pub fn triangles(&self) -> u64 {
+        if self.index_count == 0 {
+            self.first_index as u64 / 3
+        } else {
+            self.index_count as u64 / 3
+        }
+    }
 }
 
 #[repr(C)]
@@ -58,6 +112,7 @@ struct GpuParams {
     eye_far: [f32; 4],
     info: [u32; 4],
     fade: [f32; 4],
+    sort: [f32; 4],
     species: [[f32; 4]; MAX_SPECIES],
 }
 
@@ -70,7 +125,7 @@ pub(crate) struct FrameCull<'a> {
     pub fade_start: f32,
     pub frustums: &'a [Option<Frustum>; PASSES],
     pub pages: &'a [GpuPage],
-    /// Per (pass, species) list: the most trees it can receive.
+    /// Per (pass, group) list: the most trees it can receive.
     pub capacity: &'a [u32],
     pub draws: &'a [IndirectDraw],
 }
@@ -82,14 +137,14 @@ pub struct Culled<'a> {
     offsets: &'a [u32],
     capacity: &'a [u32],
     listed: &'a [u32],
-    species: usize,
+    groups: usize,
     draws_per_pass: usize,
 }
 
 impl Culled<'_> {
-    /// Bind this as vertex buffer slot 1 for (pass, species): the list's records from 0.
-    pub fn instances(&self, pass: usize, species: usize) -> Option<wgpu::BufferSlice<'_>> {
-        let i = pass * self.species + species;
+    /// Bind this as vertex buffer slot 1 for (pass, group): the list's records from 0.
+    pub fn instances(&self, pass: usize, group: usize) -> Option<wgpu::BufferSlice<'_>> {
+        let i = pass * self.groups + group;
         if self.capacity[i] == 0 {
             return None;
         }
@@ -100,9 +155,9 @@ impl Culled<'_> {
         )
     }
 
-    /// Trees in the (pass, species) list in the last frame read back (for statistics).
-    pub fn listed(&self, pass: usize, species: usize) -> u32 {
-        self.listed[pass * self.species + species]
+    /// Trees in the (pass, group) list in the last frame read back (for statistics).
+    pub fn listed(&self, pass: usize, group: usize) -> u32 {
+        self.listed[pass * self.groups + group]
     }
 
     /// The indirect arguments buffer and the byte offset of draw `k` (of the technique's
@@ -119,7 +174,11 @@ pub(crate) struct Cull {
     args_pipeline: wgpu::ComputePipeline,
     params: wgpu::Buffer,
     species_spheres: [[f32; 4]; MAX_SPECIES],
-    species: usize,
+    layout_of_lists: ListLayout,
+    groups: usize,
+    sort_scan: wgpu::ComputePipeline,
+    sort_scatter: wgpu::ComputePipeline,
+    parked: Storage,
     pages: Storage,
     lists: Storage,
     counters: Storage,
@@ -170,7 +229,20 @@ fn make(gpu: &Gpu, label: &str, usage: wgpu::BufferUsages, bytes: u64) -> wgpu::
 }
 
 impl Cull {
-    pub fn new(gpu: &Gpu, bounds: &[SpeciesBounds], max_binding: u64) -> Result<Self, RenderError> {
+    pub fn new(
+        gpu: &Gpu,
+        bounds: &[SpeciesBounds],
+        list_layout: ListLayout,
+        max_binding: u64,
+    ) -> Result<Self, RenderError> {
+        let need = 9;
+        let have = gpu.device.limits().max_storage_buffers_per_shader_stage;
+        if have < need {
+            return Err(RenderError::Option(format!(
+                "{}: the GPU cull needs {need} storage buffers per shader stage, the adapter allows {have} — use a technique that is not GPU-driven, or another adapter",
+                gpu.adapter_label()
+            )));
+        }
         if bounds.len() > MAX_SPECIES {
             return Err(RenderError::Option(format!(
                 "{} species: the GPU cull holds at most {MAX_SPECIES} — merge species that share a plant",
@@ -201,6 +273,7 @@ impl Cull {
                 rw(5),
                 layout::storage(6, c),
                 rw(7),
+                rw(8),
             ],
         });
         let module = sylvan_gpu::shader(gpu, "cull", include_str!("cull.wgsl"));
@@ -224,11 +297,21 @@ impl Cull {
             let c = (b.min + b.max) * 0.5;
             *s = [c.x, c.y, c.z, (b.max - b.min).length() * 0.5];
         }
-        let n_lists = PASSES * bounds.len().max(1);
+        let groups = if list_layout.per_species {
+            bounds.len().max(1)
+        } else {
+            1
+        };
+        let n_lists = PASSES * groups;
         let u = wgpu::BufferUsages::empty();
         Ok(Self {
             cull: compute("cull"),
             args_pipeline: compute("write_args"),
+            sort_scan: compute("sort_scan"),
+            sort_scatter: compute("sort_scatter"),
+            parked: Storage::new(gpu, "cull_parked", u, 256),
+            layout_of_lists: list_layout,
+            groups,
             layout,
             params: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("cull_params"),
@@ -237,14 +320,13 @@ impl Cull {
                 mapped_at_creation: false,
             }),
             species_spheres,
-            species: bounds.len(),
             pages: Storage::new(gpu, "cull_pages", u, 4096),
             lists: Storage::new(gpu, "cull_lists", u, n_lists as u64 * 8),
             counters: Storage::new(
                 gpu,
                 "cull_counters",
                 wgpu::BufferUsages::COPY_SRC,
-                n_lists as u64 * 4,
+                (n_lists as u64 + 2 * SORT_BUCKETS as u64) * 4,
             ),
             trees: Storage::new(gpu, "cull_lists_trees", wgpu::BufferUsages::VERTEX, 1 << 16),
             draws: Storage::new(gpu, "cull_draws", u, 256),
@@ -273,6 +355,7 @@ impl Cull {
             &self.trees,
             &self.draws,
             &self.args,
+            &self.parked,
         ]
         .iter()
         .map(|s| s.buffer.size())
@@ -288,7 +371,7 @@ impl Cull {
             offsets: &self.offsets,
             capacity: &self.capacity,
             listed: &self.listed,
-            species: self.species,
+            groups: self.groups,
             draws_per_pass: self.draws_per_pass,
         }
     }
@@ -322,11 +405,11 @@ impl Cull {
             .map(|(&offset, &capacity)| GpuList { offset, capacity })
             .collect();
         self.draws_per_pass = f.draws.len();
-        let species = self.species;
+        let groups = self.groups;
         let draws: Vec<GpuDraw> = (0..PASSES)
             .flat_map(|p| {
                 f.draws.iter().map(move |d| GpuDraw {
-                    list: (p * species) as u32 + d.species,
+                    list: (p * groups) as u32 + d.group,
                     index_count: d.index_count,
                     first_index: d.first_index,
                     _pad: 0,
@@ -339,21 +422,29 @@ impl Cull {
         self.draws
             .reserve(gpu, std::mem::size_of_val(draws.as_slice()) as u64);
         self.args.reserve(gpu, draws.len() as u64 * 20);
+        let sorted = self.layout_of_lists.sort_camera && !self.layout_of_lists.per_species;
+        let sorted_capacity = if sorted { self.capacity[0] } else { 0 };
+        self.parked.reserve(gpu, sorted_capacity as u64 * 16);
         let mut params = GpuParams {
             planes: [[0.0; 4]; 6 * PASSES],
             eye_far: [f.eye.x, f.eye.y, f.eye.z, f.far],
             info: [
-                self.species as u32,
+                self.groups as u32,
                 f.pages.len() as u32,
                 draws.len() as u32,
-                0,
+                self.layout_of_lists.per_species as u32,
             ],
             fade: [f.fade_start, 0.0, 0.0, 0.0],
+            sort: [
+                sorted as u32 as f32,
+                SORT_NEAR_M,
+                SORT_BUCKETS as f32 / (f.far.min(1e7) / SORT_NEAR_M).max(2.0).log2(),
+                sorted_capacity as f32,
+            ],
             species: self.species_spheres,
         };
         for (p, frustum) in f.frustums.iter().enumerate() {
             if let Some(fr) = frustum {
-                params.info[3] |= 1 << p;
                 for (k, plane) in fr.planes().iter().enumerate() {
                     params.planes[p * 6 + k] = plane.to_array();
                 }
@@ -381,6 +472,7 @@ impl Cull {
                 self.trees.buffer.as_entire_binding(),
                 self.draws.buffer.as_entire_binding(),
                 self.args.buffer.as_entire_binding(),
+                self.parked.buffer.as_entire_binding(),
             ],
         );
         encoder.clear_buffer(&self.counters.buffer, 0, None);
@@ -395,6 +487,13 @@ impl Cull {
                 // One workgroup row per page: the pool's binding limit keeps pages far below
                 // the 65,535 rows a dispatch allows (16.7M trees).
                 pass.dispatch_workgroups(super::PAGE / 64, f.pages.len() as u32, 1);
+            }
+            if sorted_capacity > 0 {
+                pass.set_pipeline(&self.sort_scan);
+                pass.dispatch_workgroups(1, 1, 1);
+                pass.set_pipeline(&self.sort_scatter);
+                let groups = sorted_capacity.div_ceil(64);
+                pass.dispatch_workgroups(groups.min(65_535), groups.div_ceil(65_535), 1);
             }
             if !draws.is_empty() {
                 pass.set_pipeline(&self.args_pipeline);

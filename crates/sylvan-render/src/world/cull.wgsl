@@ -1,10 +1,14 @@
 // The GPU-driven cull (world/cull.rs): one invocation per pooled tree of a page a pass may see;
-// each survivor is appended to its (pass, species) list; then one invocation per indirect draw
-// writes its arguments from the list's count.
+// each survivor is appended to its (pass, group) list — a group is a species, or every species
+// for a technique that draws them all in one list (then the record's rot.z is species + tint).
+// A sorted camera list (back to front, for blended impostors) is filled by a counting sort
+// over distance buckets: the cull counts each bucket and parks the tree, `sort_scan` turns the
+// counts into far-to-near starts, `sort_scatter` writes each tree at its place. Last, one
+// invocation per indirect draw writes its arguments from its list's count.
 
 struct PoolTree {
     base_scale: vec4<f32>,
-    // x cos, y sin, z tint seed, w the species' bits
+    // x cos, y sin, z tint seed, w the species' bits (in the lists: presence)
     rot: vec4<f32>,
 }
 
@@ -27,30 +31,44 @@ struct Draw {
     pad: u32,
 }
 
+// A tree parked for the sort: pool index, bucket, place in the bucket, presence bits.
+struct Parked {
+    tree: u32,
+    bucket: u32,
+    slot: u32,
+    presence: u32,
+}
+
 struct Params {
     // pass p's plane k at 6p + k: xyz inward normal, w offset
     planes: array<vec4<f32>, 30>,
     // xyz eye, w the camera pass's far distance
     eye_far: vec4<f32>,
-    // x species, y pages, z draws, w passes drawn (bit mask)
+    // x groups per pass, y pages, z draws, w 1 when groups are species (else one mixed group)
     info: vec4<u32>,
     // x: camera-pass presence falls from 1 at this distance to 0 at eye_far.w (the world's
     // tree distance); infinite for a world drawn whole
     fade: vec4<f32>,
+    // x 1: the camera list is sorted back to front; y nearest bucketed distance;
+    // z buckets per log2 of distance; w sorted list capacity
+    sort: vec4<f32>,
     // per species: xyz model-space centre of its bounds, w radius (plant units)
     species: array<vec4<f32>, 64>,
 }
+
+const PASSES: u32 = 5u;
+const BUCKETS: u32 = 4096u;
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> pool: array<PoolTree>;
 @group(0) @binding(2) var<storage, read> pages: array<Page>;
 @group(0) @binding(3) var<storage, read> lists: array<List>;
+// [lists' counts | BUCKETS bucket counts | BUCKETS bucket starts]
 @group(0) @binding(4) var<storage, read_write> counters: array<atomic<u32>>;
 @group(0) @binding(5) var<storage, read_write> out_trees: array<PoolTree>;
 @group(0) @binding(6) var<storage, read> draws: array<Draw>;
 @group(0) @binding(7) var<storage, read_write> args: array<u32>;
-
-const PASSES: u32 = 5u;
+@group(0) @binding(8) var<storage, read_write> parked: array<Parked>;
 
 fn inside(pass_index: u32, c: vec3<f32>, r: f32) -> bool {
     for (var k = 0u; k < 6u; k++) {
@@ -60,6 +78,20 @@ fn inside(pass_index: u32, c: vec3<f32>, r: f32) -> bool {
         }
     }
     return true;
+}
+
+fn list_count() -> u32 {
+    return PASSES * params.info.x;
+}
+
+// The record a list holds for pool tree `t` with `presence`.
+fn listed(t: PoolTree, presence: f32) -> PoolTree {
+    let species = bitcast<u32>(t.rot.w);
+    var z = t.rot.z;
+    if (params.info.w == 0u) {
+        z = f32(species) + t.rot.z;
+    }
+    return PoolTree(t.base_scale, vec4<f32>(t.rot.xy, z, presence));
 }
 
 @compute @workgroup_size(64)
@@ -76,11 +108,13 @@ fn cull(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) l
     let q = local.xyz * s;
     let c = t.base_scale.xyz + vec3<f32>(t.rot.x * q.x + t.rot.y * q.z, q.y, -t.rot.y * q.x + t.rot.x * q.z);
     let r = local.w * s;
-    let near = distance(c, params.eye_far.xyz) - r;
+    let centre_distance = distance(c, params.eye_far.xyz);
+    let near = centre_distance - r;
     var presence = 1.0;
     if (near > params.fade.x) {
         presence = 1.0 - smoothstep(params.fade.x, params.eye_far.w, near);
     }
+    let group = select(0u, species, params.info.w == 1u);
     for (var p = 0u; p < PASSES; p++) {
         if ((page.passes & (1u << p)) == 0u) {
             continue;
@@ -91,12 +125,68 @@ fn cull(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) l
         if (!inside(p, c, r)) {
             continue;
         }
-        let list = p * params.info.x + species;
+        let list = p * params.info.x + group;
         let slot = atomicAdd(&counters[list], 1u);
+        if (p == 0u && params.sort.x > 0.5) {
+            // Far buckets get the high numbers; scan lays them out first.
+            let level = log2(max(centre_distance, params.sort.y) / params.sort.y) * params.sort.z;
+            let bucket = min(u32(level), BUCKETS - 1u);
+            let in_bucket = atomicAdd(&counters[list_count() + bucket], 1u);
+            if (slot < lists[list].capacity) {
+                parked[slot] = Parked(page.first + i, bucket, in_bucket, bitcast<u32>(presence));
+            }
+            continue;
+        }
         if (slot < lists[list].capacity) {
             // Shadow casters fade with the camera's trees, so no shadow outlives its tree.
-            out_trees[lists[list].offset + slot] = PoolTree(t.base_scale, vec4<f32>(t.rot.xyz, presence));
+            out_trees[lists[list].offset + slot] = listed(t, presence);
         }
+    }
+}
+
+// One workgroup: bucket starts, farthest bucket first (exclusive sums from the top).
+var<workgroup> partial: array<u32, 256>;
+
+@compute @workgroup_size(256)
+fn sort_scan(@builtin(local_invocation_index) li: u32) {
+    let per = BUCKETS / 256u;
+    let base = list_count();
+    // Thread li owns buckets from the top: BUCKETS-1-li*per down to BUCKETS-(li+1)*per.
+    var sum = 0u;
+    for (var k = 0u; k < per; k++) {
+        sum += atomicLoad(&counters[base + BUCKETS - 1u - (li * per + k)]);
+    }
+    partial[li] = sum;
+    workgroupBarrier();
+    if (li == 0u) {
+        var run = 0u;
+        for (var j = 0u; j < 256u; j++) {
+            let v = partial[j];
+            partial[j] = run;
+            run += v;
+        }
+    }
+    workgroupBarrier();
+    var run = partial[li];
+    for (var k = 0u; k < per; k++) {
+        let b = BUCKETS - 1u - (li * per + k);
+        atomicStore(&counters[base + BUCKETS + b], run);
+        run += atomicLoad(&counters[base + b]);
+    }
+}
+
+@compute @workgroup_size(64)
+fn sort_scatter(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let list = 0u; // the camera pass's one mixed list
+    let n = min(atomicLoad(&counters[list]), lists[list].capacity);
+    let i = gid.y * 65535u * 64u + gid.x;
+    if (i >= n) {
+        return;
+    }
+    let e = parked[i];
+    let at = atomicLoad(&counters[list_count() + BUCKETS + e.bucket]) + e.slot;
+    if (at < lists[list].capacity) {
+        out_trees[lists[list].offset + at] = listed(pool[e.tree], bitcast<f32>(e.presence));
     }
 }
 
@@ -109,8 +199,18 @@ fn write_args(@builtin(global_invocation_id) gid: vec3<u32>) {
     let draw = draws[d];
     let n = min(atomicLoad(&counters[draw.list]), lists[draw.list].capacity);
     // DrawIndexedIndirect: index count, instance count, first index, base vertex, first instance
+    // (a draw with index_count 0 is a non-indexed draw of `first_index` vertices: same layout
+    // as DrawIndirect's vertex count, instance count, first vertex, first instance)
+    if (draw.index_count == 0u) {
+        args[d * 5u + 0u] = draw.first_index;
+        args[d * 5u + 1u] = n;
+        args[d * 5u + 2u] = 0u;
+        args[d * 5u + 3u] = 0u;
+        args[d * 5u + 4u] = 0u;
+        return;
+    }
     args[d * 5u + 0u] = draw.index_count;
-    args[d * 5u + 1u] = select(0u, n, draw.index_count > 0u);
+    args[d * 5u + 1u] = n;
     args[d * 5u + 2u] = draw.first_index;
     args[d * 5u + 3u] = 0u;
     args[d * 5u + 4u] = 0u;

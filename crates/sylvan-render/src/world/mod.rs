@@ -20,7 +20,7 @@
 mod cull;
 mod produce;
 
-pub use cull::{Culled, IndirectDraw};
+pub use cull::{Culled, IndirectDraw, ListLayout};
 
 use crate::RenderError;
 use crate::frame::{CASCADES, Frustum};
@@ -157,7 +157,8 @@ pub struct World {
     free_pages: Vec<u32>,
     pool_pages: u32,
     max_pool_pages: u32,
-    species: usize,
+    /// Lists per pass (species, or 1 for a mixed list).
+    groups: usize,
     cull: cull::Cull,
     stats: WorldStats,
     budget_bytes: u64,
@@ -166,7 +167,12 @@ pub struct World {
 impl World {
     /// A world over `scene`'s terrain and trees; starts the tile workers. Nothing is produced
     /// until the first frame.
-    pub fn new(gpu: &Gpu, scene: &Scene, bounds: &[SpeciesBounds]) -> Result<Self, RenderError> {
+    pub fn new(
+        gpu: &Gpu,
+        scene: &Scene,
+        bounds: &[SpeciesBounds],
+        list_layout: ListLayout,
+    ) -> Result<Self, RenderError> {
         let settings = scene.world;
         let tile_m = settings.tile_m;
         let tiles = scene
@@ -191,7 +197,12 @@ impl World {
         let max_pool_pages = (binding / (TREE_BYTES * PAGE as u64)) as u32;
         let pool_pages = 64.min(max_pool_pages);
         let pool = pool_buffer(gpu, pool_pages);
-        let cull = cull::Cull::new(gpu, bounds, binding)?;
+        let cull = cull::Cull::new(gpu, bounds, list_layout, binding)?;
+        let groups = if list_layout.per_species {
+            bounds.len().max(1)
+        } else {
+            1
+        };
         Ok(Self {
             budget_bytes: settings.cache_mib as u64 * (1 << 20),
             settings,
@@ -202,7 +213,8 @@ impl World {
             pool,
             pool_pages,
             max_pool_pages,
-            species: bounds.len(),
+
+            groups,
             cull,
             stats: WorldStats::default(),
         })
@@ -292,7 +304,7 @@ impl World {
         stats.tiles_evicted = self.evict(eye, range);
         // 4. Tiles per pass → pages and list capacities; the GPU culls the trees.
         let mut pages = Vec::new();
-        let mut capacity = vec![0u32; PASSES * self.species];
+        let mut capacity = vec![0u32; PASSES * self.groups];
         for &(_, key) in &needed {
             let Some(r) = self.resident.get(&key) else {
                 continue;
@@ -305,7 +317,8 @@ impl World {
                 {
                     mask |= 1 << p;
                     for (s, &n) in r.species_counts.iter().enumerate() {
-                        capacity[p * self.species + s] += n;
+                        let group = if self.groups == 1 { 0 } else { s };
+                        capacity[p * self.groups + group] += n;
                     }
                 }
             }
@@ -357,15 +370,15 @@ impl World {
         self.stats.trees_drawn = [0; PASSES];
         self.stats.trees_dropped = 0;
         for (i, &(n, cap)) in counts.iter().enumerate() {
-            self.stats.trees_drawn[i / self.species.max(1)] += n.min(cap);
+            self.stats.trees_drawn[i / self.groups] += n.min(cap);
             self.stats.trees_dropped += n.saturating_sub(cap);
         }
         Ok(())
     }
 
-    /// Trees listed per (pass, species) in the last frame (after [`World::finish_frame`]).
-    pub(crate) fn listed(&self) -> &[u32] {
-        self.cull.listed()
+    /// Trees listed in (pass, group) in the last frame (after [`World::finish_frame`]).
+    pub(crate) fn listed(&self, pass: usize, group: usize) -> u32 {
+        self.cull.listed()[pass * self.groups + group]
     }
 
     fn tile_may_be_seen(&self, key: TileKey, view: &WorldView<'_>) -> bool {

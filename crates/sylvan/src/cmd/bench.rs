@@ -39,6 +39,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
         Some(p) => Some(load_path(p, args.view.camera.as_deref())?),
         None => None,
     };
+    let start = std::time::Instant::now();
     let r = args.view.resolve()?;
     let camera_at = |i: usize| match &camera_path {
         Some(p) => {
@@ -48,9 +49,10 @@ pub fn run(args: BenchArgs) -> Result<()> {
         None => (0.0, r.camera),
     };
     let (gpu, mut renderer, bake_ms) = prepare(&r)?;
-    for _ in 0..2 {
-        renderer.render(&gpu, &camera_at(0).1, &r.sun)?;
-    }
+    let ready_ms = start.elapsed().as_secs_f64() * 1e3;
+    let first = renderer.render(&gpu, &camera_at(0).1, &r.sun)?;
+    let startup_ms = ready_ms + first.cpu_ms;
+    renderer.render(&gpu, &camera_at(0).1, &r.sun)?;
     // A frame can take seconds on a software rasteriser: show progress on a terminal
     // (indicatif draws nothing when stderr is not one, so JSON consumers see no noise).
     let progress = indicatif::ProgressBar::new(args.frames as u64).with_message("frames");
@@ -72,6 +74,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
         bake_ms,
         gpu.adapter_label(),
     );
+    report.startup_ms = Some(startup_ms);
     if let Some(p) = &args.path {
         report.path = Some(p.display().to_string());
         report.per_frame = Some(records);

@@ -52,6 +52,11 @@ pub struct Report {
     pub baked_bytes: u64,
     pub gpu_bytes: u64,
     pub bake_ms: f64,
+    /// Scene file to the first frame's commands (`bench`): loading the scene, preparing the
+    /// renderer (bakes or cache reads) and the first frame's CPU work — tile production
+    /// included — but not the GPU's time for it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub startup_ms: Option<f64>,
     /// Each drawing technique's own statistics (last frame), under its name: e.g.
     /// `"hbt": {"trees_opened": 12, "visibility_bytes": 3072, …}`.
     #[serde(flatten)]
@@ -124,6 +129,7 @@ impl Report {
             baked_bytes: last.asset_bytes,
             gpu_bytes: last.gpu_bytes,
             bake_ms,
+            startup_ms: None,
             techniques: last
                 .technique_stats
                 .iter()

@@ -385,11 +385,7 @@ impl Technique for Geometry {
     /// Per species its wood, then its leaves (the draws of [`Geometry::record_indirect`]).
     fn indirect_draws(&self) -> Vec<IndirectDraw> {
         self.meshes()
-            .map(|(species, _, mesh)| IndirectDraw {
-                species: species as u32,
-                index_count: mesh.index_count,
-                first_index: 0,
-            })
+            .map(|(species, _, mesh)| IndirectDraw::indexed(species as u32, mesh.index_count, 0))
             .collect()
     }
 }

@@ -6,9 +6,11 @@ use super::{OctahedralBakeParams, OctahedralDrawParams, SHADOW_OFFSET};
 use crate::RenderError;
 use crate::bake::image::TileLevel;
 use crate::frame::{CASCADES, FrameResources};
+use crate::instances::GpuTreeInstance;
 use crate::technique::common::{self, Growable, TileAtlas};
 use crate::technique::geometry::LEAF_TRANSLUCENCY;
 use crate::technique::{DrawContext, DrawCounts, FrameInput, Technique};
+use crate::world::{IndirectDraw, ListLayout};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use std::ops::Range;
@@ -43,24 +45,6 @@ struct GpuOctAtlas {
     draw: [f32; 4],
 }
 
-/// One tree's quad (vertex locations 4–6, per instance).
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable, Debug, PartialEq)]
-struct GpuOctInstance {
-    base_scale: [f32; 4],
-    rot: [f32; 4],
-    species: u32,
-    _pad: [u32; 3],
-}
-
-impl GpuOctInstance {
-    const LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
-        array_stride: std::mem::size_of::<GpuOctInstance>() as u64,
-        step_mode: wgpu::VertexStepMode::Instance,
-        attributes: &wgpu::vertex_attr_array![4 => Float32x4, 5 => Float32x4, 6 => Uint32],
-    };
-}
-
 /// The prepared hemi-octahedral impostor technique.
 pub struct Octahedral {
     /// Per species: the model-space centre of its frames (for the back-to-front sort).
@@ -71,8 +55,9 @@ pub struct Octahedral {
     static_bytes: u64,
     // Per frame (reused; nothing is allocated once the vectors have grown).
     instances: Growable,
-    staging: Vec<GpuOctInstance>,
-    sort: Vec<(f32, GpuOctInstance)>,
+    /// Records as the GPU cull lists them: `rot.z` is species + tint seed.
+    staging: Vec<GpuTreeInstance>,
+    sort: Vec<(f32, GpuTreeInstance)>,
     ranges: [Range<u32>; PASSES],
 }
 
@@ -216,7 +201,7 @@ impl Octahedral {
             frame,
             &module,
             "octahedral",
-            &[None, Some(GpuOctInstance::LAYOUT)],
+            &[None, Some(GpuTreeInstance::LAYOUT)],
             &bind_layout,
         );
         let static_bytes = color.bytes
@@ -261,11 +246,9 @@ impl Technique for Octahedral {
                     let world = Vec3::new(x + c * q.x + sn * q.z, y + q.y, z - sn * q.x + c * q.z);
                     self.sort.push((
                         world.distance_squared(input.eye),
-                        GpuOctInstance {
+                        GpuTreeInstance {
                             base_scale: rec.base_scale,
-                            rot: rec.rot,
-                            species: s as u32,
-                            _pad: [0; 3],
+                            rot: [rec.rot[0], rec.rot[1], s as f32 + rec.rot[2], rec.rot[3]],
                         },
                     ));
                 }
@@ -294,6 +277,19 @@ impl Technique for Octahedral {
         self.static_bytes + self.instances.buffer.size()
     }
 
+    /// Six vertices per tree from each pass's one list.
+    fn indirect_draws(&self) -> Vec<IndirectDraw> {
+        vec![IndirectDraw::vertices(0, 6)]
+    }
+
+    /// One list of every species per pass, the camera's back to front.
+    fn list_layout(&self) -> ListLayout {
+        ListLayout {
+            per_species: false,
+            sort_camera: true,
+        }
+    }
+
     fn reallocations(&self) -> u32 {
         self.instances.reallocations
     }
@@ -307,6 +303,21 @@ impl Octahedral {
         ctx: &DrawContext<'_>,
         pipeline: &wgpu::RenderPipeline,
     ) -> DrawCounts {
+        if let Some(culled) = ctx.culled {
+            let Some(instances) = culled.instances(ctx.pass, 0) else {
+                return DrawCounts::default();
+            };
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, ctx.frame_bind, &[]);
+            pass.set_bind_group(1, &self.bind, &[]);
+            pass.set_vertex_buffer(1, instances);
+            let (args, offset) = culled.args(ctx.pass, 0);
+            pass.draw_indirect(args, offset);
+            return DrawCounts {
+                draw_calls: 1,
+                triangles: culled.listed(ctx.pass, 0) as u64 * 2,
+            };
+        }
         let r = self.ranges[ctx.pass].clone();
         if r.is_empty() {
             return DrawCounts::default();

@@ -213,7 +213,7 @@ pub const ENTRY: Entry = Entry {
     kind: Kind::PerTree,
     summary: "industry baseline: hemi-octahedral impostor, one quad per tree, 3 views blended with parallax",
     debug_color: [0.35, 1.0, 0.2],
-    gpu_driven: false,
+    gpu_driven: true,
     schema: params::schema::<OctahedralBakeParams, OctahedralDrawParams>,
     check: |s| resolve(s).map(|_| ()),
     build: |cx| {

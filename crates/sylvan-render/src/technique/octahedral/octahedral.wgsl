@@ -6,8 +6,6 @@
 
 struct OctIn {
     @builtin(vertex_index) vertex: u32,
-    // With the tree instance (`TreeInstance`, locations 4 and 5): its species.
-    @location(6) species: u32,
 };
 
 struct OctOut {
@@ -67,8 +65,12 @@ fn hidden() -> OctOut {
 
 // The quad of one tree facing `toward` (the eye, or the sun when `is_dir`), the views seen
 // from there and the mip level.
-fn oct_vertex(in: OctIn, inst: TreeInstance, toward_world: vec3<f32>, is_dir: bool) -> OctOut {
-    let sp = oct_species[in.species];
+fn oct_vertex(in: OctIn, inst_in: TreeInstance, toward_world: vec3<f32>, is_dir: bool) -> OctOut {
+    // Every species is in one list: the instance's rot.z is species + tint seed.
+    let species = u32(floor(inst_in.rot.z));
+    var inst = inst_in;
+    inst.rot.z = fract(inst_in.rot.z);
+    let sp = oct_species[species];
     let centre = instance_to_world(sp.centre_radius.xyz, inst.base_scale, inst.rot);
     let radius = sp.centre_radius.w * inst.base_scale.w;
     var a = toward_world;
@@ -99,7 +101,7 @@ fn oct_vertex(in: OctIn, inst: TreeInstance, toward_world: vec3<f32>, is_dir: bo
     var out: OctOut;
     out.pos = frame.view_proj * vec4<f32>(world, 1.0);
     out.world = world;
-    out.views = vec4<u32>(pick.views, in.species);
+    out.views = vec4<u32>(pick.views, species);
     out.weights = pick.weights;
     out.base_scale = inst.base_scale;
     out.rot = inst.rot;

@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# The tiled world (#15): CPU per frame, startup and memory at 10k, 100k, 1M and 10M trees,
+# GPU-driven against the CPU-driven frame (--cpu-driven: every tree placed up front, culled
+# on the CPU each frame), same run. Writes one JSON line per run to $OUT/world.jsonl.
+# Usage: scripts/measure-world.sh [OUT] (default /tmp/sylvan-world); ~10 min on 2 cores.
+set -euo pipefail
+OUT=${1:-/tmp/sylvan-world}
+mkdir -p "$OUT"
+cargo build --release -p sylvan >/dev/null
+B=target/release/sylvan
+: >"$OUT/world.jsonl"
+run() { # label technique scene extra...
+  local label=$1 technique=$2 scene=$3
+  shift 3
+  /usr/bin/time -f '%M' -o "$OUT/rss" "$B" bench "assets/scenes/bench/forest-$scene.toml" \
+    --technique "$technique" --size 320x180 --no-shadows --frames "${FRAMES:-5}" --json "$@" \
+    >"$OUT/one.json" 2>"$OUT/err" || { echo "$label $scene: $(tail -1 "$OUT/err")"; return 0; }
+  python3 - "$label" "$scene" "$OUT" <<'PY'
+import json, sys
+label, scene, out = sys.argv[1:4]
+d = json.load(open(f"{out}/one.json"))
+d["label"], d["scene"], d["peak_rss_kb"] = label, scene, int(open(f"{out}/rss").read().split()[-1])
+open(f"{out}/world.jsonl", "a").write(json.dumps(d) + "\n")
+w = d.get("world", {})
+print(f"{label:12} {scene:5} {d['technique']:10} cpu {d['cpu_ms']['median']:8.2f} ms (max {d['cpu_ms']['max']:8.2f})"
+      f"  gpu {d['frame_ms']['median']:9.1f} ms  startup {d['startup_ms']:8.0f} ms  rss {d['peak_rss_kb']/1024:6.0f} MB"
+      f"  drawn {sum(d['trees_drawn'].values()):8}  resident {int(w.get('trees_resident', 0)):8}  gpu_bytes {d['gpu_bytes']/2**20:6.0f} MB")
+PY
+}
+for scene in 10k 100k 1m 10m; do
+  run gpu-driven octahedral "$scene"
+  [ "$scene" = 10m ] || run cpu-driven octahedral "$scene" --cpu-driven
+done
