@@ -10,7 +10,7 @@ use crate::technique::{
     BakeProgress, BandRange, BuildContext, DrawContext, DrawCounts, FrameInput, Technique, registry,
 };
 use crate::terrain::TerrainPass;
-use crate::world::{IndirectDraw, World, WorldView};
+use crate::world::{ListRequest, World, WorldView};
 use glam::{Mat4, Vec3};
 use std::collections::BTreeMap;
 use sylvan_gpu::{FrameTimer, Gpu, OUTPUT_FORMAT, RenderTarget, Resolver, TimerKind};
@@ -136,8 +136,8 @@ pub struct Renderer {
     instances: Instances,
     /// The tiled world, for a GPU-driven technique (its trees never reach `instances`).
     world: Option<World>,
-    /// The technique's indirect draws per (pass, species) list.
-    indirect: Vec<IndirectDraw>,
+    /// What the technique asks of the GPU cull (one per band of a chain).
+    requests: Vec<ListRequest>,
     /// Trees in the whole world (expected count for a seeded forest).
     trees_in_world: usize,
     resolver: Resolver,
@@ -226,7 +226,11 @@ impl Renderer {
             .collect();
         let entry = registry::find(&options.technique)?;
         // A GPU-driven technique draws the world tile by tile; any other gets every tree now.
-        let gpu_driven = entry.gpu_driven && !options.cpu_driven;
+        let gpu_driven = !options.cpu_driven
+            && match entry.kind {
+                registry::Kind::Chain => crate::technique::lod::gpu_driven(scene)?,
+                _ => entry.gpu_driven,
+            };
         let trees = if gpu_driven {
             Vec::new()
         } else {
@@ -276,9 +280,9 @@ impl Renderer {
             scene.seeded.as_ref().map_or(0.0, |f| f.tallest_m()),
             f32::max,
         );
-        let indirect = technique.indirect_draws();
+        let requests = technique.list_requests();
         let world = match gpu_driven {
-            true => Some(World::new(gpu, scene, &bounds, technique.list_layout())?),
+            true => Some(World::new(gpu, scene, &bounds, &requests)?),
             false => None,
         };
         let renderer = Self {
@@ -289,7 +293,7 @@ impl Renderer {
             bake_reports,
             instances,
             world,
-            indirect,
+            requests,
             trees_in_world: scene.estimated_trees().round() as usize,
             resolver,
             timer: FrameTimer::new(gpu, options.wall_timer),
@@ -392,7 +396,7 @@ impl Renderer {
                 far: view.far,
                 frustums: &frustums,
             };
-            world.prepare(gpu, &mut encoder, &wv, &self.indirect)?;
+            world.prepare(gpu, &mut encoder, &wv)?;
         } else {
             self.instances.update(
                 gpu,
@@ -428,7 +432,7 @@ impl Renderer {
             gpu.queue.write_buffer(buffer, 0, bytemuck::bytes_of(&r));
         }
 
-        let culled = self.world.as_ref().map(World::culled);
+        let culled = self.world.as_ref().map(World::culled).unwrap_or_default();
         let mut shadow_counts = DrawCounts::default();
         // With shadows off the maps are never sampled (`sun_dir.w` = 0): skip the passes.
         for c in (0..CASCADES).filter(|_| shadows) {
@@ -455,7 +459,7 @@ impl Renderer {
                 frame_bind: &self.frame.cascade_binds[c],
                 instances: &self.instances,
                 ranges: &self.instances.ranges[1 + c],
-                culled: culled.as_ref(),
+                culled: &culled,
             };
             shadow_counts += self.technique.draw(&mut pass, &ctx);
         }
@@ -493,7 +497,7 @@ impl Renderer {
                 frame_bind: &self.frame.main_bind,
                 instances: &self.instances,
                 ranges: &self.instances.ranges[0],
-                culled: culled.as_ref(),
+                culled: &culled,
             };
             main_counts += self.technique.draw(&mut pass, &ctx);
         }
@@ -511,16 +515,26 @@ impl Renderer {
         let frame_ms = self.timer.read_ms(gpu)?;
         gpu.check()?;
         let mut world_stats = None;
+        let mut trees_drawn_gpu = None;
         if let Some(world) = &mut self.world {
             // The frame is done (the timer waited): its counts are ready without a stall.
             world.finish_frame(gpu)?;
             let world = &*world;
             let tris = |pass: usize| -> u64 {
-                self.indirect
-                    .iter()
-                    .map(|d| world.listed(pass, d.group as usize) as u64 * d.triangles())
-                    .sum()
+                let per_request = self.requests.iter().enumerate().map(|(r, req)| {
+                    req.draws
+                        .iter()
+                        .map(|d| world.listed(r, pass, d.group as usize) as u64 * d.triangles())
+                        .sum::<u64>()
+                });
+                per_request.sum()
             };
+            let mut drawn: BTreeMap<String, u32> = BTreeMap::new();
+            for (r, req) in self.requests.iter().enumerate() {
+                let n: u32 = (0..world.groups(r)).map(|g| world.listed(r, 0, g)).sum();
+                *drawn.entry(req.technique.to_string()).or_default() += n;
+            }
+            trees_drawn_gpu = Some(drawn);
             main_counts.triangles = self.terrain.triangles() + tris(0);
             shadow_counts.triangles = (1..=CASCADES)
                 .filter(|_| shadows)
@@ -554,8 +568,8 @@ impl Renderer {
                 Some(_) => self.trees_in_world,
                 None => self.instances.total(),
             },
-            trees_drawn: match &world_stats {
-                Some(w) => [(self.technique.name().to_string(), w.trees_drawn[0])].into(),
+            trees_drawn: match trees_drawn_gpu {
+                Some(d) => d,
                 None => self
                     .technique
                     .trees_drawn(&self.instances)

@@ -181,6 +181,18 @@ pub fn presence(bands: &[Band], i: usize, distance: f32) -> f32 {
     rise * fall
 }
 
+/// Whether every band of `scene`'s chain is GPU-driven (then the chain is).
+pub(crate) fn gpu_driven(scene: &sylvan_scene::Scene) -> Result<bool, RenderError> {
+    let bands = if scene.lod_bands.is_empty() {
+        parse_chain(&scene.lod_chain)?
+    } else {
+        from_tables(&scene.lod_bands)?
+    };
+    Ok(bands
+        .iter()
+        .all(|b| registry::find(b.technique).is_ok_and(|e| e.gpu_driven)))
+}
+
 /// Fills each band's instance list from the frame's.
 pub(crate) fn split(
     gpu: &sylvan_gpu::Gpu,
@@ -203,7 +215,8 @@ pub const ENTRY: Entry = Entry {
     kind: Kind::Chain,
     summary: "the LOD chain: a technique per distance band ([lod] chain or [[lod.band]]), cross-faded",
     debug_color: [1.0, 1.0, 1.0],
-    gpu_driven: false,
+    // When every band's technique is (decided per scene: `gpu_driven`).
+    gpu_driven: true,
     schema: params::schema::<NoParams, NoParams>,
     check: |s| params::resolve::<NoParams, NoParams>("auto", s).map(|_| ()),
     build: |cx| Chain::build(cx),
@@ -306,17 +319,55 @@ impl Technique for Chain {
 
     fn draw(&self, pass: &mut wgpu::RenderPass<'_>, ctx: &DrawContext<'_>) -> DrawCounts {
         let mut counts = DrawCounts::default();
-        for (t, list) in self.techniques.iter().zip(&self.lists) {
+        for (i, (t, list)) in self.techniques.iter().zip(&self.lists).enumerate() {
             let sub = DrawContext {
                 pass: ctx.pass,
                 frame_bind: ctx.frame_bind,
                 instances: list,
                 ranges: &list.ranges[ctx.pass],
-                culled: None,
+                culled: ctx.culled.get(i..=i).unwrap_or(&[]),
             };
             counts += t.draw(pass, &sub);
         }
         counts
+    }
+
+    /// One request per band: its technique's lists, presence by the band's cross-fades.
+    fn list_requests(&self) -> Vec<crate::world::ListRequest> {
+        let n = self.bands.len();
+        self.techniques
+            .iter()
+            .zip(&self.bands)
+            .enumerate()
+            .flat_map(|(i, (t, b))| {
+                let window = [
+                    if i == 0 {
+                        -1e30
+                    } else {
+                        b.start * (1.0 - FADE)
+                    },
+                    if i == 0 {
+                        -1e30
+                    } else {
+                        b.start * (1.0 + FADE)
+                    },
+                    if i + 1 == n {
+                        1e30
+                    } else {
+                        b.end * (1.0 - FADE)
+                    },
+                    if i + 1 == n {
+                        1e30
+                    } else {
+                        b.end * (1.0 + FADE)
+                    },
+                ];
+                t.list_requests().into_iter().map(move |mut r| {
+                    r.window = window;
+                    r
+                })
+            })
+            .collect()
     }
 
     fn bytes(&self) -> u64 {

@@ -181,6 +181,17 @@ pub trait Technique {
     fn list_layout(&self) -> crate::world::ListLayout {
         crate::world::ListLayout::default()
     }
+    /// What a GPU-driven technique asks of the cull: by default one request of its layout and
+    /// draws over every distance; a chain asks one per band ([`DrawContext::culled`] holds
+    /// their lists in this order).
+    fn list_requests(&self) -> Vec<crate::world::ListRequest> {
+        vec![crate::world::ListRequest {
+            technique: self.name(),
+            layout: self.list_layout(),
+            draws: self.indirect_draws(),
+            window: crate::world::ListRequest::ALL,
+        }]
+    }
 }
 
 /// What a technique may look at once per frame, before any pass is recorded.
@@ -210,9 +221,9 @@ pub struct DrawContext<'a> {
     pub instances: &'a Instances,
     /// `ranges[species]`: this pass's instances per species.
     pub ranges: &'a [Range<u32>],
-    /// The GPU cull's lists and indirect arguments (GPU-driven techniques; `None` when the
-    /// trees come from `instances`).
-    pub culled: Option<&'a crate::world::Culled<'a>>,
+    /// The GPU cull's lists and indirect arguments, one per [`Technique::list_requests`]
+    /// entry (GPU-driven techniques; empty when the trees come from `instances`).
+    pub culled: &'a [crate::world::Culled<'a>],
 }
 
 /// What a technique reports back about a pass.

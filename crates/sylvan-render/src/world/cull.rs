@@ -39,6 +39,26 @@ impl Default for ListLayout {
     }
 }
 
+/// What a GPU-driven technique (or one band of a chain) asks of the cull: its lists, the draws
+/// it makes from them, and the distance window it serves.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ListRequest {
+    /// The technique's registry name (for statistics).
+    pub technique: &'static str,
+    /// How its trees are listed.
+    pub layout: ListLayout,
+    /// Its draws per pass.
+    pub draws: Vec<IndirectDraw>,
+    /// Presence by distance from the eye to the trunk base: rises over `[w0, w1]` and falls
+    /// over `[w2, w3]` (an equal pair is a step); [`ListRequest::ALL`] for every distance.
+    pub window: [f32; 4],
+}
+
+impl ListRequest {
+    /// The window of a technique drawing every distance.
+    pub const ALL: [f32; 4] = [-1e30, -1e30, 1e30, 1e30];
+}
+
 /// One draw a technique makes from each pass's list of a group (its species, or 0 for a
 /// mixed list): an index range drawn once per listed tree, or `vertices` non-indexed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -113,6 +133,7 @@ struct GpuParams {
     info: [u32; 4],
     fade: [f32; 4],
     sort: [f32; 4],
+    band: [f32; 4],
     species: [[f32; 4]; MAX_SPECIES],
 }
 
@@ -123,6 +144,8 @@ pub(crate) struct FrameCull<'a> {
     pub far: f32,
     /// Where their presence starts falling to 0 at `far` (infinite: no fade).
     pub fade_start: f32,
+    /// The band window (see [`ListRequest::window`]).
+    pub window: [f32; 4],
     pub frustums: &'a [Option<Frustum>; PASSES],
     pub pages: &'a [GpuPage],
     /// Per (pass, group) list: the most trees it can receive.
@@ -380,6 +403,11 @@ impl Cull {
         &self.listed
     }
 
+    /// Lists per pass.
+    pub fn groups(&self) -> usize {
+        self.groups
+    }
+
     /// Uploads the frame's tables and records the two dispatches and the counts' copy.
     pub fn record(
         &mut self,
@@ -441,6 +469,7 @@ impl Cull {
                 SORT_BUCKETS as f32 / (f.far.min(1e7) / SORT_NEAR_M).max(2.0).log2(),
                 sorted_capacity as f32,
             ],
+            band: f.window,
             species: self.species_spheres,
         };
         for (p, frustum) in f.frustums.iter().enumerate() {

@@ -52,6 +52,9 @@ struct Params {
     // x 1: the camera list is sorted back to front; y nearest bucketed distance;
     // z buckets per log2 of distance; w sorted list capacity
     sort: vec4<f32>,
+    // the band of a level-of-detail chain this list serves, by distance from the eye to the
+    // trunk base: presence rises over [x, y] and falls over [z, w] (x = y: a step at x)
+    band: vec4<f32>,
     // per species: xyz model-space centre of its bounds, w radius (plant units)
     species: array<vec4<f32>, 64>,
 }
@@ -78,6 +81,14 @@ fn inside(pass_index: u32, c: vec3<f32>, r: f32) -> bool {
         }
     }
     return true;
+}
+
+// smoothstep from e0 to e1; with e1 <= e0 a step at e0 (as the CPU's `common::smoothstep`).
+fn ramp(e0: f32, e1: f32, x: f32) -> f32 {
+    if (e1 <= e0) {
+        return select(0.0, 1.0, x >= e0);
+    }
+    return smoothstep(e0, e1, x);
 }
 
 fn list_count() -> u32 {
@@ -113,6 +124,12 @@ fn cull(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) l
     var presence = 1.0;
     if (near > params.fade.x) {
         presence = 1.0 - smoothstep(params.fade.x, params.eye_far.w, near);
+    }
+    let base_distance = distance(t.base_scale.xyz, params.eye_far.xyz);
+    presence *= ramp(params.band.x, params.band.y, base_distance)
+        * (1.0 - ramp(params.band.z, params.band.w, base_distance));
+    if (presence <= 0.0) {
+        return;
     }
     let group = select(0u, species, params.info.w == 1u);
     for (var p = 0u; p < PASSES; p++) {

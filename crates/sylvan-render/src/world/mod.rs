@@ -20,7 +20,7 @@
 mod cull;
 mod produce;
 
-pub use cull::{Culled, IndirectDraw, ListLayout};
+pub use cull::{Culled, IndirectDraw, ListLayout, ListRequest};
 
 use crate::RenderError;
 use crate::frame::{CASCADES, Frustum};
@@ -157,9 +157,9 @@ pub struct World {
     free_pages: Vec<u32>,
     pool_pages: u32,
     max_pool_pages: u32,
-    /// Lists per pass (species, or 1 for a mixed list).
-    groups: usize,
-    cull: cull::Cull,
+    /// One cull per request (a technique, or each band of a chain).
+    culls: Vec<cull::Cull>,
+    requests: Vec<ListRequest>,
     stats: WorldStats,
     budget_bytes: u64,
 }
@@ -171,7 +171,7 @@ impl World {
         gpu: &Gpu,
         scene: &Scene,
         bounds: &[SpeciesBounds],
-        list_layout: ListLayout,
+        requests: &[ListRequest],
     ) -> Result<Self, RenderError> {
         let settings = scene.world;
         let tile_m = settings.tile_m;
@@ -197,12 +197,10 @@ impl World {
         let max_pool_pages = (binding / (TREE_BYTES * PAGE as u64)) as u32;
         let pool_pages = 64.min(max_pool_pages);
         let pool = pool_buffer(gpu, pool_pages);
-        let cull = cull::Cull::new(gpu, bounds, list_layout, binding)?;
-        let groups = if list_layout.per_species {
-            bounds.len().max(1)
-        } else {
-            1
-        };
+        let culls = requests
+            .iter()
+            .map(|r| cull::Cull::new(gpu, bounds, r.layout, binding))
+            .collect::<Result<Vec<_>, _>>()?;
         Ok(Self {
             budget_bytes: settings.cache_mib as u64 * (1 << 20),
             settings,
@@ -214,8 +212,8 @@ impl World {
             pool_pages,
             max_pool_pages,
 
-            groups,
-            cull,
+            culls,
+            requests: requests.to_vec(),
             stats: WorldStats::default(),
         })
     }
@@ -225,14 +223,15 @@ impl World {
         self.stats
     }
 
-    /// The lists and draw arguments of the last [`World::prepare`], for the techniques' draws.
-    pub(crate) fn culled(&self) -> Culled<'_> {
-        self.cull.culled()
+    /// The lists and draw arguments of the last [`World::prepare`], one per request, for the
+    /// techniques' draws.
+    pub(crate) fn culled(&self) -> Vec<Culled<'_>> {
+        self.culls.iter().map(cull::Cull::culled).collect()
     }
 
     /// GPU bytes held (pool, lists, arguments).
     pub fn bytes(&self) -> u64 {
-        self.pool.size() + self.cull.bytes()
+        self.pool.size() + self.culls.iter().map(cull::Cull::bytes).sum::<u64>()
     }
 
     /// Tiles within `range` of `eye` (horizontal), nearest first, with their distances.
@@ -267,7 +266,6 @@ impl World {
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
         view: &WorldView<'_>,
-        draws: &[IndirectDraw],
     ) -> Result<(), RenderError> {
         let eye = Vec2::new(view.eye.x, view.eye.z);
         let range = self.settings.tree_distance_m.min(view.far);
@@ -302,9 +300,14 @@ impl World {
         }
         // 3. Over budget: evict the farthest tiles not in range.
         stats.tiles_evicted = self.evict(eye, range);
-        // 4. Tiles per pass → pages and list capacities; the GPU culls the trees.
-        let mut pages = Vec::new();
-        let mut capacity = vec![0u32; PASSES * self.groups];
+        // 4. Tiles per pass → pages and list capacities (per request: the tiles reaching
+        // into its band); the GPU culls the trees.
+        let fade_start = if self.settings.tree_distance_m.is_finite() {
+            range * (1.0 - TREE_DISTANCE_FADE)
+        } else {
+            f32::INFINITY
+        };
+        let mut seen: Vec<(&Resident, u32, f32, f32)> = Vec::new();
         for &(_, key) in &needed {
             let Some(r) = self.resident.get(&key) else {
                 continue;
@@ -316,10 +319,6 @@ impl World {
                     && (p > 0 || box_distance(view.eye, r.min, r.max) < range)
                 {
                     mask |= 1 << p;
-                    for (s, &n) in r.species_counts.iter().enumerate() {
-                        let group = if self.groups == 1 { 0 } else { s };
-                        capacity[p * self.groups + group] += n;
-                    }
                 }
             }
             if mask == 0 {
@@ -328,34 +327,51 @@ impl World {
             if mask & 1 != 0 {
                 stats.trees_considered += r.count as u64;
             }
-            for (i, &page) in r.pages.iter().enumerate() {
-                let first = i as u32 * PAGE;
-                pages.push(cull::GpuPage {
-                    first: page * PAGE,
-                    count: (r.count - first).min(PAGE),
-                    passes: mask,
-                    _pad: 0,
-                });
-            }
+            let near = box_distance(view.eye, r.min, r.max);
+            let far = (r.max - r.min).length() + near;
+            seen.push((r, mask, near, far));
         }
-        self.cull.record(
-            gpu,
-            encoder,
-            &self.pool,
-            &cull::FrameCull {
-                eye: view.eye,
-                far: range,
-                fade_start: if self.settings.tree_distance_m.is_finite() {
-                    range * (1.0 - TREE_DISTANCE_FADE)
-                } else {
-                    f32::INFINITY
+        for (request, cull) in self.requests.iter().zip(&mut self.culls) {
+            let [w0, _, _, w3] = request.window;
+            let groups = cull.groups();
+            let mut pages = Vec::new();
+            let mut capacity = vec![0u32; PASSES * groups];
+            for &(r, mask, near, far) in &seen {
+                if far < w0 || near > w3 {
+                    continue;
+                }
+                for p in (0..PASSES).filter(|p| mask & (1 << p) != 0) {
+                    for (s, &n) in r.species_counts.iter().enumerate() {
+                        let group = if groups == 1 { 0 } else { s };
+                        capacity[p * groups + group] += n;
+                    }
+                }
+                for (i, &page) in r.pages.iter().enumerate() {
+                    let first = i as u32 * PAGE;
+                    pages.push(cull::GpuPage {
+                        first: page * PAGE,
+                        count: (r.count - first).min(PAGE),
+                        passes: mask,
+                        _pad: 0,
+                    });
+                }
+            }
+            cull.record(
+                gpu,
+                encoder,
+                &self.pool,
+                &cull::FrameCull {
+                    eye: view.eye,
+                    far: range,
+                    fade_start,
+                    window: request.window,
+                    frustums: view.frustums,
+                    pages: &pages,
+                    capacity: &capacity,
+                    draws: &request.draws,
                 },
-                frustums: view.frustums,
-                pages: &pages,
-                capacity: &capacity,
-                draws,
-            },
-        )?;
+            )?;
+        }
         stats.tiles_resident = self.resident.len() as u32;
         stats.tiles_pending = self.producer.pending() as u32;
         stats.trees_resident = self.resident.values().map(|r| r.count as u64).sum();
@@ -366,19 +382,29 @@ impl World {
 
     /// After the frame's submission has completed: reads the lists' counts back.
     pub(crate) fn finish_frame(&mut self, gpu: &Gpu) -> Result<(), RenderError> {
-        let counts = self.cull.read_counts(gpu)?;
         self.stats.trees_drawn = [0; PASSES];
         self.stats.trees_dropped = 0;
-        for (i, &(n, cap)) in counts.iter().enumerate() {
-            self.stats.trees_drawn[i / self.groups] += n.min(cap);
-            self.stats.trees_dropped += n.saturating_sub(cap);
+        for cull in &mut self.culls {
+            let groups = cull.groups();
+            let counts = cull.read_counts(gpu)?;
+            for (i, &(n, cap)) in counts.iter().enumerate() {
+                self.stats.trees_drawn[i / groups] += n.min(cap);
+                self.stats.trees_dropped += n.saturating_sub(cap);
+            }
         }
         Ok(())
     }
 
-    /// Trees listed in (pass, group) in the last frame (after [`World::finish_frame`]).
-    pub(crate) fn listed(&self, pass: usize, group: usize) -> u32 {
-        self.cull.listed()[pass * self.groups + group]
+    /// Lists per pass of request `request`.
+    pub(crate) fn groups(&self, request: usize) -> usize {
+        self.culls[request].groups()
+    }
+
+    /// Trees listed in (pass, group) of request `request` in the last frame (after
+    /// [`World::finish_frame`]).
+    pub(crate) fn listed(&self, request: usize, pass: usize, group: usize) -> u32 {
+        let cull = &self.culls[request];
+        cull.listed()[pass * cull.groups() + group]
     }
 
     fn tile_may_be_seen(&self, key: TileKey, view: &WorldView<'_>) -> bool {

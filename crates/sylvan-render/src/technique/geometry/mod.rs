@@ -451,7 +451,7 @@ impl Geometry {
         ctx: &DrawContext<'_>,
         shadow: bool,
     ) -> DrawCounts {
-        if let Some(culled) = ctx.culled {
+        if let Some(culled) = ctx.culled.first() {
             return self.record_indirect(pass, ctx, culled, shadow);
         }
         let (wood, leaf) = self.pipes.for_pass(shadow);

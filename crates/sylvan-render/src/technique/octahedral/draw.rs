@@ -303,7 +303,7 @@ impl Octahedral {
         ctx: &DrawContext<'_>,
         pipeline: &wgpu::RenderPipeline,
     ) -> DrawCounts {
-        if let Some(culled) = ctx.culled {
+        if let Some(culled) = ctx.culled.first() {
             let Some(instances) = culled.instances(ctx.pass, 0) else {
                 return DrawCounts::default();
             };
