@@ -2,7 +2,8 @@
 # The tiled world (#15): CPU per frame, startup and memory at 10k, 100k, 1M and 10M trees,
 # GPU-driven against the CPU-driven frame (--cpu-driven: every tree placed up front, culled
 # on the CPU each frame), same run. Writes one JSON line per run to $OUT/world.jsonl.
-# Usage: scripts/measure-world.sh [OUT] (default /tmp/sylvan-world); ~10 min on 2 cores.
+# Usage: [SCALE=0] [PICTURES=0] scripts/measure-world.sh [OUT] (default /tmp/sylvan-world);
+# ~10 min each part on 2 cores.
 set -euo pipefail
 OUT=${1:-/tmp/sylvan-world}
 mkdir -p "$OUT"
@@ -27,7 +28,34 @@ print(f"{label:12} {scene:5} {d['technique']:10} cpu {d['cpu_ms']['median']:8.2f
       f"  drawn {sum(d['trees_drawn'].values()):8}  resident {int(w.get('trees_resident', 0)):8}  gpu_bytes {d['gpu_bytes']/2**20:6.0f} MB")
 PY
 }
-for scene in 10k 100k 1m 10m; do
-  run gpu-driven octahedral "$scene"
-  [ "$scene" = 10m ] || run cpu-driven octahedral "$scene" --cpu-driven
-done
+if [ "${SCALE:-1}" = 1 ]; then
+  for scene in 10k 100k 1m 10m; do
+    run gpu-driven octahedral "$scene"
+    [ "$scene" = 10m ] || run cpu-driven octahedral "$scene" --cpu-driven
+  done
+fi
+
+# Same pictures: each GPU-driven technique's frame against the CPU-driven one (FLIP, trees drawn).
+pictures() { # scene-or-empty label
+  local scene=$1 label=$2
+  for technique in geometry octahedral; do
+    for mode in gpu cpu; do
+      local flag=""
+      [ "$mode" = cpu ] && flag=--cpu-driven
+      "$B" render $scene --technique "$technique" --size 640x360 $flag \
+        --out "$OUT/$label-$technique-$mode.png" --stats "$OUT/$label-$technique-$mode.json" >/dev/null 2>&1
+    done
+    python3 - "$OUT" "$label" "$technique" "$("$B" compare "$OUT/$label-$technique-cpu.png" "$OUT/$label-$technique-gpu.png" --json)" <<'PY'
+import json, sys
+out, label, technique, cmp = sys.argv[1], sys.argv[2], sys.argv[3], json.loads(sys.argv[4])
+g = json.load(open(f"{out}/{label}-{technique}-gpu.json")); c = json.load(open(f"{out}/{label}-{technique}-cpu.json"))
+print(f"same-picture {label:10} {technique:10} FLIP {cmp['flip_mean']:.4f}  drawn gpu {g['trees_drawn']} cpu {c['trees_drawn']}")
+PY
+  done
+}
+if [ "${PICTURES:-1}" = 1 ]; then
+  pictures "" default
+  for s in assets/scenes/eval/one-pine.toml assets/scenes/eval/one-fir.toml assets/scenes/example.toml; do
+    pictures "$s" "$(basename "$s" .toml)"
+  done
+fi

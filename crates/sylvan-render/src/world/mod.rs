@@ -202,7 +202,9 @@ impl World {
             .map(|r| cull::Cull::new(gpu, bounds, r.layout, binding))
             .collect::<Result<Vec<_>, _>>()?;
         Ok(Self {
-            budget_bytes: settings.cache_mib as u64 * (1 << 20),
+            // The cache holds what the budget allows and the pool's one binding can address.
+            budget_bytes: (settings.cache_mib as u64 * (1 << 20))
+                .min(max_pool_pages as u64 * PAGE as u64 * TREE_BYTES),
             settings,
             tiles,
             producer: Producer::new(source, threads),
@@ -293,13 +295,16 @@ impl World {
             arrived.extend(self.producer.wait_for(&must));
         }
         stats.tiles_produced = arrived.len() as u32;
+        arrived.retain(|t| wanted_set.contains(&t.key) && !self.resident.contains_key(&t.key));
+        // 3. Room for them within the budget: evict the farthest tiles not in range first.
+        let incoming: u64 = arrived
+            .iter()
+            .map(|t| (t.trees.len() as u64).div_ceil(PAGE as u64) * PAGE as u64 * TREE_BYTES)
+            .sum();
+        stats.tiles_evicted = self.evict(eye, range, incoming);
         for tile in arrived {
-            if wanted_set.contains(&tile.key) {
-                self.insert(gpu, tile)?;
-            }
+            self.insert(gpu, tile)?;
         }
-        // 3. Over budget: evict the farthest tiles not in range.
-        stats.tiles_evicted = self.evict(eye, range);
         // 4. Tiles per pass → pages and list capacities (per request: the tiles reaching
         // into its band); the GPU culls the trees.
         let fade_start = if self.settings.tree_distance_m.is_finite() {
@@ -485,8 +490,9 @@ impl World {
         (self.pool_pages - self.free_pages.len() as u32) as u64 * PAGE as u64 * TREE_BYTES
     }
 
-    fn evict(&mut self, eye: Vec2, range: f32) -> u32 {
-        if self.resident_bytes() <= self.budget_bytes {
+    /// Evicts the farthest tiles out of `range` until `incoming` more bytes fit the budget.
+    fn evict(&mut self, eye: Vec2, range: f32, incoming: u64) -> u32 {
+        if self.resident_bytes() + incoming <= self.budget_bytes {
             return 0;
         }
         let t = self.settings.tile_m;
@@ -499,7 +505,7 @@ impl World {
         far.sort_by(|a, b| b.0.total_cmp(&a.0));
         let mut evicted = 0;
         for (_, key) in far {
-            if self.resident_bytes() <= self.budget_bytes {
+            if self.resident_bytes() + incoming <= self.budget_bytes {
                 break;
             }
             if let Some(r) = self.resident.remove(&key) {

@@ -77,6 +77,11 @@ pub struct FrameRecord {
     pub t: f32,
     /// Frame time in milliseconds (the report's `timer`).
     pub ms: f64,
+    /// CPU milliseconds before recording (as the report's `cpu_ms`).
+    pub cpu_ms: f64,
+    /// The tiled world's statistics (GPU-driven techniques): tiles produced, waited for, …
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub world: Option<BTreeMap<String, f64>>,
     /// Trees drawn per technique.
     pub trees_drawn: BTreeMap<String, u32>,
     /// Triangles in the camera pass.
@@ -93,6 +98,8 @@ impl FrameRecord {
         Self {
             t,
             ms: stats.frame_ms,
+            cpu_ms: stats.cpu_ms,
+            world: stats.technique_stats.get("world").cloned(),
             trees_drawn: stats.trees_drawn.clone(),
             triangles: stats.triangles,
             shadow_triangles: stats.shadow_triangles,
