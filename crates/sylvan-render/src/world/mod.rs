@@ -195,7 +195,17 @@ impl World {
             .max_storage_buffer_binding_size
             .min(limits.max_buffer_size);
         let max_pool_pages = (binding / (TREE_BYTES * PAGE as u64)) as u32;
-        let pool_pages = 64.min(max_pool_pages);
+        // Sized up front for the trees expected within reach (the range, the ring and a tile's
+        // diagonal), so that growing — a copy of the whole pool — does not hitch a flight.
+        let reach = settings.tree_distance_m + settings.prefetch_m + tile_m * 1.5;
+        let area = (std::f64::consts::PI * (reach as f64).powi(2))
+            .min(scene.terrain.size[0] as f64 * scene.terrain.size[1] as f64);
+        let expected = scene.trees.len() as f64
+            + scene.seeded.as_ref().map_or(0.0, |f| f.peak_trees(area));
+        let budget_pages = settings.cache_mib as u64 * (1 << 20) / (PAGE as u64 * TREE_BYTES);
+        let pool_pages = ((expected * 1.25 / PAGE as f64).ceil() as u64)
+            .clamp(64, budget_pages.max(64))
+            .min(max_pool_pages as u64) as u32;
         let pool = pool_buffer(gpu, pool_pages);
         let culls = requests
             .iter()
