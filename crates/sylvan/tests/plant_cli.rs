@@ -23,7 +23,7 @@ fn tmp(name: &str) -> std::path::PathBuf {
 
 #[test]
 fn stats_is_one_json_object() {
-    for preset in ["pine", "prunus", "bush"] {
+    for preset in ["pine", "prunus", "bush", "chestnut", "beech"] {
         let (ok, out, err) = sylvan(&["plant", "--preset", preset, "--stats"]);
         assert!(ok, "{err}");
         assert_eq!(out.trim().lines().count(), 1);
