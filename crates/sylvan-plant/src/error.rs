@@ -16,7 +16,7 @@ pub struct Pos {
 #[non_exhaustive]
 pub enum PlantError {
     /// Unknown preset name.
-    #[error("unknown plant preset '{0}' — use one of: pine, prunus, bush")]
+    #[error("unknown plant preset '{0}' — use one of: pine, prunus, bush, chestnut, beech")]
     UnknownPreset(String),
     /// An error at a place in a source file (syntax, bad expression, division by zero, a limit
     /// exceeded by a production).

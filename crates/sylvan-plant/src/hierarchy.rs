@@ -117,8 +117,14 @@ pub(crate) struct RawNode {
 }
 
 /// Keeps the nodes whose subtree draws wood; leaf-only brackets fold into their branch.
-/// `seg_first` maps segment numbers to wood index offsets; leaves are quads (6 indices).
-pub(crate) fn finish(raw: &[RawNode], seg_first: &[u32], leaf_count: u32) -> Hierarchy {
+/// `seg_first` maps segment numbers to wood index offsets; every leaf has `leaf_indices`
+/// indices (6 for a card quad, 12 or 24 for a single leaf's blade).
+pub(crate) fn finish(
+    raw: &[RawNode],
+    seg_first: &[u32],
+    leaf_count: u32,
+    leaf_indices: u32,
+) -> Hierarchy {
     let mut map = vec![u32::MAX; raw.len()];
     let mut nodes: Vec<BranchNode> = Vec::new();
     for (i, r) in raw.iter().enumerate() {
@@ -150,7 +156,7 @@ pub(crate) fn finish(raw: &[RawNode], seg_first: &[u32], leaf_count: u32) -> Hie
             leaves: r.leaves.clone(),
             own_leaves: 0,
             own_internodes: 0,
-            leaf_indices: r.leaves.start * 6..r.leaves.end * 6,
+            leaf_indices: r.leaves.start * leaf_indices..r.leaves.end * leaf_indices,
             wood_indices: wi(r.segments.start)..wi(r.segments.end),
         });
     }
@@ -170,6 +176,6 @@ pub(crate) fn finish(raw: &[RawNode], seg_first: &[u32], leaf_count: u32) -> Hie
     }
     Hierarchy {
         nodes,
-        leaf_first_index: (0..=leaf_count).map(|i| i * 6).collect(),
+        leaf_first_index: (0..=leaf_count).map(|i| i * leaf_indices).collect(),
     }
 }

@@ -16,6 +16,7 @@
 
 #![warn(missing_docs)]
 
+pub mod blade;
 mod error;
 pub mod export;
 pub mod hierarchy;
@@ -32,7 +33,7 @@ pub mod turtle;
 pub use error::{PlantError, Pos};
 pub use hierarchy::{BranchNode, Hierarchy};
 pub use instancing::{BaseObject, Instance, Instancing};
-pub use lsystem::{LSystem, LeafKind, Word};
+pub use lsystem::{Blade, LSystem, LeafKind, Word};
 pub use mesh::{LeafTexture, Mesh, Plant};
 pub use presets::{PRESETS, preset_source};
 
@@ -99,7 +100,8 @@ pub fn from_lsystem(ls: &LSystem, name: &str) -> Result<Plant, PlantError> {
     let word = ls.derive()?;
     let interp = turtle::interpret(ls, &word)?;
     let sk = &interp.skeleton;
-    let tris = sk.wood_triangles() + 2 * sk.leaves.len();
+    let shape = blade::LeafShape::new(ls.leaf_kind, ls.blade);
+    let tris = sk.wood_triangles() + shape.triangles() * sk.leaves.len();
     if tris > MAX_TRIANGLES {
         return Err(PlantError::file(
             &ls.file,
@@ -121,15 +123,22 @@ pub fn from_lsystem(ls: &LSystem, name: &str) -> Result<Plant, PlantError> {
         ));
     }
     let (wood, seg_first) = sk.mesh_wood();
-    let aspect = skeleton::leaf_aspect(ls.leaf_kind);
-    let leaves = skeleton::mesh_leaves(&sk.leaves, aspect, ls.seed);
-    let hierarchy = hierarchy::finish(&interp.nodes, &seg_first, sk.leaves.len() as u32);
-    let instancing = build_instancing(&interp, aspect);
+    let leaves = skeleton::mesh_leaves(&sk.leaves, &shape, ls.seed);
+    let hierarchy = hierarchy::finish(
+        &interp.nodes,
+        &seg_first,
+        sk.leaves.len() as u32,
+        shape.indices.len() as u32,
+    );
+    let instancing = build_instancing(&interp, &shape);
+    let maps = texture_for(ls.leaf_kind);
     let mut p = Plant {
         name: name.to_string(),
         wood,
         leaves,
-        leaf_texture: texture_for(ls.leaf_kind),
+        leaf_texture: maps.front,
+        leaf_back: maps.back,
+        leaf_normal: maps.normal,
         internodes: interp.internodes,
         leaf_count: sk.leaves.len(),
         hierarchy,
@@ -140,17 +149,20 @@ pub fn from_lsystem(ls: &LSystem, name: &str) -> Result<Plant, PlantError> {
     Ok(p)
 }
 
-fn texture_for(kind: LeafKind) -> LeafTexture {
+/// A leaf kind's images, generated once per process.
+fn texture_for(kind: LeafKind) -> texture::LeafMaps {
     use std::sync::OnceLock;
-    static BROAD: OnceLock<LeafTexture> = OnceLock::new();
-    static NEEDLE: OnceLock<LeafTexture> = OnceLock::new();
-    match kind {
-        LeafKind::Broadleaf => BROAD.get_or_init(|| texture::leaf_texture(kind)).clone(),
-        LeafKind::Needles => NEEDLE.get_or_init(|| texture::leaf_texture(kind)).clone(),
-    }
+    static MAPS: [OnceLock<texture::LeafMaps>; 4] = [const { OnceLock::new() }; 4];
+    let slot = match kind {
+        LeafKind::Broadleaf => 0,
+        LeafKind::Needles => 1,
+        LeafKind::Chestnut => 2,
+        LeafKind::Beech => 3,
+    };
+    MAPS[slot].get_or_init(|| texture::leaf_maps(kind)).clone()
 }
 
-fn build_instancing(interp: &turtle::Interpretation, aspect: f32) -> Instancing {
+fn build_instancing(interp: &turtle::Interpretation, shape: &blade::LeafShape) -> Instancing {
     let objects = interp
         .objects
         .iter()
@@ -160,7 +172,7 @@ fn build_instancing(interp: &turtle::Interpretation, aspect: f32) -> Instancing 
                 BaseObject {
                     level: 0,
                     wood: Mesh::default(),
-                    leaves: skeleton::mesh_leaves(&o.skeleton.leaves, aspect, 0),
+                    leaves: skeleton::mesh_leaves(&o.skeleton.leaves, shape, 0),
                     instances: Vec::new(),
                     uses: o.uses,
                 }

@@ -47,8 +47,14 @@ pub struct Plant {
     pub wood: Mesh,
     /// Leaves or needles (alpha-tested with `leaf_texture`, two-sided).
     pub leaves: Mesh,
-    /// The leaf cut-out texture.
+    /// The leaf cut-out texture (front side; its alpha is the cut-out mask of both sides).
     pub leaf_texture: LeafTexture,
+    /// The back side of the leaves (same size and alpha as `leaf_texture`), drawn where a
+    /// two-sided leaf is seen from behind; empty: the front image on both sides.
+    pub leaf_back: LeafTexture,
+    /// Tangent-space normal map of the leaves (RGB = normal · 0.5 + 0.5, x along +u, y along
+    /// +v, z out of the front face; linear, not sRGB); empty: flat.
+    pub leaf_normal: LeafTexture,
     /// Bounding box of wood and leaves, metres.
     pub bbox_min: [f32; 3],
     /// Bounding box of wood and leaves, metres.

@@ -58,13 +58,15 @@ pub struct Skeleton {
     pub leaves: Vec<LeafFrame>,
 }
 
-/// Width/length ratio of leaf quads per leaf kind.
+/// Width/length ratio of leaf quads (and of a single leaf's texture footprint) per leaf kind.
 pub fn leaf_aspect(kind: crate::lsystem::LeafKind) -> f32 {
     match kind {
         // Leaf-cluster card: square.
         crate::lsystem::LeafKind::Broadleaf => 1.0,
         // Needle-shoot spray card: longer than wide.
         crate::lsystem::LeafKind::Needles => 0.7,
+        // A single leaf: the width of its texture's footprint.
+        kind => crate::blade::Outline::of(kind).map_or(1.0, |o| o.texture_width()),
     }
 }
 
@@ -156,28 +158,22 @@ impl Skeleton {
     }
 }
 
-/// Meshes leaves as quads (4 vertices, 2 triangles each, in leaf order): leaf `i` owns
-/// vertices `4i..4i+4` and indices `6i..6i+6`. UV v runs from 1 at the base to 0 at the tip.
-pub fn mesh_leaves(leaves: &[LeafFrame], aspect: f32, tint_seed: u64) -> Mesh {
+/// Meshes leaves, each a copy of `shape` (the card quad, or a single leaf's blade) placed in
+/// its frame and scaled by its size, in leaf order: leaf `i` owns vertices `i·V..(i+1)·V` and
+/// indices `i·I..(i+1)·I` (V, I: the shape's vertex and index counts). UV v runs from 1 at the
+/// base to 0 at the tip. Each triangle's front face (counter-clockwise) faces the leaf normal.
+pub fn mesh_leaves(leaves: &[LeafFrame], shape: &crate::blade::LeafShape, tint_seed: u64) -> Mesh {
     let mut m = Mesh::default();
-    m.positions.reserve(leaves.len() * 4);
-    m.normals.reserve(leaves.len() * 4);
-    m.uvs.reserve(leaves.len() * 4);
-    m.colors.reserve(leaves.len() * 4);
-    m.indices.reserve(leaves.len() * 6);
+    let (nv, ni) = (shape.positions.len(), shape.indices.len());
+    m.positions.reserve(leaves.len() * nv);
+    m.normals.reserve(leaves.len() * nv);
+    m.uvs.reserve(leaves.len() * nv);
+    m.colors.reserve(leaves.len() * nv);
+    m.indices.reserve(leaves.len() * ni);
     for (i, l) in leaves.iter().enumerate() {
-        let half = l.side * (l.size * aspect * 0.5);
-        let tip = l.heading * l.size;
         let base = m.positions.len() as u32;
-        let corners = [
-            l.pos - half,
-            l.pos + half,
-            l.pos + half + tip,
-            l.pos - half + tip,
-        ];
-        let uvs = [[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]];
         let t = palette(&LEAF_PALETTE, l.color);
-        // Per-card variation: brightness ±12 %, and a slight shift towards yellow or blue.
+        // Per-leaf variation: brightness ±12 %, and a slight shift towards yellow or blue.
         let h = |salt: u64| {
             crate::rng::hash01(tint_seed ^ (i as u64).wrapping_mul(0x9e37_79b9) ^ salt) as f32
         };
@@ -188,23 +184,29 @@ pub fn mesh_leaves(leaves: &[LeafFrame], aspect: f32, tint_seed: u64) -> Mesh {
             t[1] * k,
             t[2] * k * (1.0 - 0.2 * hue),
         ];
-        // Order the corners so that the front face (counter-clockwise) faces `normal`.
-        let ccw = (corners[1] - corners[0])
-            .cross(corners[2] - corners[0])
-            .dot(l.normal)
-            >= 0.0;
-        for (c, uv) in corners.iter().zip(uvs) {
-            m.positions.push(c.to_array());
-            m.normals.push(l.normal.to_array());
-            m.uvs.push(uv);
+        let place =
+            |p: [f32; 3]| l.pos + (l.side * p[0] + l.heading * p[1] + l.normal * p[2]) * l.size;
+        let turn = |n: [f32; 3]| {
+            (l.side * n[0] + l.heading * n[1] + l.normal * n[2]).normalize_or(l.normal)
+        };
+        for ((p, n), uv) in shape.positions.iter().zip(&shape.normals).zip(&shape.uvs) {
+            m.positions.push(place(*p).to_array());
+            m.normals.push(turn(*n).to_array());
+            m.uvs.push(*uv);
             m.colors.push(col);
         }
-        if ccw {
-            m.indices
-                .extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
-        } else {
-            m.indices
-                .extend_from_slice(&[base, base + 2, base + 1, base, base + 3, base + 2]);
+        for t in shape.indices.chunks_exact(3) {
+            let [a, b, c] = [t[0], t[1], t[2]].map(|j| base + j);
+            let p = |j: u32| Vec3::from(m.positions[j as usize]);
+            let nsum = Vec3::from(m.normals[a as usize])
+                + Vec3::from(m.normals[b as usize])
+                + Vec3::from(m.normals[c as usize]);
+            let ccw = (p(b) - p(a)).cross(p(c) - p(a)).dot(nsum) >= 0.0;
+            if ccw {
+                m.indices.extend_from_slice(&[a, b, c]);
+            } else {
+                m.indices.extend_from_slice(&[a, c, b]);
+            }
         }
     }
     m

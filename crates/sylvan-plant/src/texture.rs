@@ -21,11 +21,153 @@ use crate::rng::hash01;
 /// Side of the generated square textures, pixels.
 pub const LEAF_TEXTURE_SIZE: u32 = 256;
 
-/// The texture for a leaf kind.
+/// The (front) texture for a leaf kind.
 pub fn leaf_texture(kind: LeafKind) -> LeafTexture {
+    leaf_maps(kind).front
+}
+
+/// A leaf kind's images: front colour with the cut-out alpha, back colour (same alpha; empty
+/// for the cards, which look the same from both sides) and a tangent-space normal map (empty
+/// for the cards: flat).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct LeafMaps {
+    /// Front side, sRGB + alpha mask.
+    pub front: LeafTexture,
+    /// Back side, sRGB + the same alpha; empty: the front.
+    pub back: LeafTexture,
+    /// Normal map, linear RGB = n · 0.5 + 0.5 (x along +u, y along +v, z out of the front).
+    pub normal: LeafTexture,
+}
+
+/// Every image of a leaf kind.
+pub fn leaf_maps(kind: LeafKind) -> LeafMaps {
     match kind {
-        LeafKind::Broadleaf => broadleaf(LEAF_TEXTURE_SIZE),
-        LeafKind::Needles => needles(LEAF_TEXTURE_SIZE),
+        LeafKind::Broadleaf => LeafMaps {
+            front: broadleaf(LEAF_TEXTURE_SIZE),
+            ..Default::default()
+        },
+        LeafKind::Needles => LeafMaps {
+            front: needles(LEAF_TEXTURE_SIZE),
+            ..Default::default()
+        },
+        LeafKind::Chestnut | LeafKind::Beech => single_leaf(kind, LEAF_TEXTURE_SIZE),
+    }
+}
+
+/// Colours of a single-leaf kind (sRGB): front blade, front veins, back blade, back veins,
+/// petiole.
+fn leaf_colours(kind: LeafKind) -> [[f32; 3]; 5] {
+    match kind {
+        // Chestnut: dark glossy green above, paler grey-green below with raised yellowish veins.
+        LeafKind::Chestnut => [
+            [0.17, 0.30, 0.09],
+            [0.32, 0.42, 0.16],
+            [0.36, 0.45, 0.25],
+            [0.55, 0.58, 0.36],
+            [0.42, 0.40, 0.18],
+        ],
+        // Beech: fresh mid green above, lighter and slightly silvery below.
+        _ => [
+            [0.20, 0.35, 0.10],
+            [0.30, 0.43, 0.15],
+            [0.38, 0.50, 0.26],
+            [0.50, 0.58, 0.34],
+            [0.40, 0.36, 0.20],
+        ],
+    }
+}
+
+/// One leaf in the kind's outline ([`crate::blade::Outline`]), petiole at the bottom edge,
+/// tip at the top: front and back colour with the same alpha, and a normal map of the midrib,
+/// the lateral veins and the round petiole (sunken veins on the front, which the back sees as
+/// ridges when the shader flips the normal).
+fn single_leaf(kind: LeafKind, n: u32) -> LeafMaps {
+    let o = crate::blade::Outline::of(kind).expect("a single-leaf kind");
+    let aspect = o.texture_width();
+    // Square texels: as many across as the footprint is wide (so that mip levels follow the
+    // leaf's size on screen in both directions), rounded to a multiple of 8.
+    let w = ((n as f32 * aspect / 8.0).round() as u32).max(1) * 8;
+    let mut front = Canvas::with_size(w, n, aspect);
+    let mut back = Canvas::with_size(w, n, aspect);
+    let [fc, fv, bc, bv, pc] = leaf_colours(kind);
+    let tx = front.texel();
+    let span = 1.0 - o.petiole;
+    // Lateral veins leave the midrib at about 50° (chestnut) to 45° (beech) towards the tip.
+    let slope = if kind == LeafKind::Chestnut { 0.8 } else { 1.1 };
+    let mut height = vec![0.0f32; (w * n) as usize];
+    for y in 0..n {
+        for x in 0..w {
+            let [px, py] = front.pos(x, y);
+            let hw = o.half_width(py);
+            let cov = ((hw - px.abs()) / tx + 0.5).clamp(0.0, 1.0);
+            if cov <= 0.0 || !(0.0..=1.0).contains(&py) {
+                continue;
+            }
+            let bh = o.blade_half(py);
+            let i = (y * w + x) as usize;
+            let ph = o.petiole_width(py);
+            if bh <= ph {
+                // The petiole: a round stalk.
+                let q = (px / ph.max(1e-6)).clamp(-1.0, 1.0);
+                height[i] = ph * (1.0 - q * q).max(0.0).sqrt();
+                let shade = 0.85 + 0.15 * (1.0 - q * q).sqrt();
+                front.over(x, y, scale3(pc, shade), cov);
+                back.over(x, y, scale3(pc, shade), cov);
+                continue;
+            }
+            let s = (py - o.petiole) / span;
+            let g = (px.abs() / bh).min(1.0);
+            // Midrib and lateral veins (distances in leaf lengths).
+            let mw = 0.005 * (1.0 - 0.6 * s) + 0.0025;
+            let dm = px.abs();
+            let s0 = s - slope * px.abs() / span;
+            let dv = ((s0 * o.veins + 0.5).fract() - 0.5).abs() / o.veins * span * 0.62;
+            let vw = 0.0035 * (1.0 - 0.4 * g);
+            let mid = (-(dm / mw).powi(2)).exp();
+            let vein = if s0 > 0.02 && g < 0.96 {
+                (-(dv / vw).powi(2)).exp() * (1.0 - 0.6 * g)
+            } else {
+                0.0
+            };
+            // Between the veins the blade bulges a little (slightly puckered).
+            let pucker = 0.5 - 0.5 * (dv / (span * 0.62 / o.veins) * std::f32::consts::PI).cos();
+            height[i] = -0.0025 * mid - 0.0013 * vein + 0.0005 * pucker * (1.0 - g);
+            let j = hash01(i as u64 * 2_654_435_761) as f32 - 0.5;
+            let k = 1.0 + 0.05 * j - 0.12 * g * g;
+            let veins = mid.max(vein);
+            let f = scale3(lerp3(fc, fv, veins * 0.8), k);
+            let b = scale3(lerp3(bc, bv, veins), k * (1.0 + 0.04 * (1.0 - g)));
+            front.over(x, y, f, cov);
+            back.over(x, y, b, cov);
+        }
+    }
+    // Normal map from the height field: x along +u (across to the right), y along +v (down the
+    // image, towards the petiole).
+    let (du, dv) = (aspect / w as f32, 1.0 / n as f32);
+    let h = |x: i64, y: i64| -> f32 {
+        let (x, y) = (x.clamp(0, w as i64 - 1), y.clamp(0, n as i64 - 1));
+        height[(y as u32 * w + x as u32) as usize]
+    };
+    let mut normal = Vec::with_capacity((w * n * 4) as usize);
+    for y in 0..n as i64 {
+        for x in 0..w as i64 {
+            let gx = (h(x + 1, y) - h(x - 1, y)) / (2.0 * du);
+            let gy = (h(x, y + 1) - h(x, y - 1)) / (2.0 * dv);
+            let len = (gx * gx + gy * gy + 1.0).sqrt();
+            for c in [-gx / len, -gy / len, 1.0 / len] {
+                normal.push(((c * 0.5 + 0.5) * 255.0).round() as u8);
+            }
+            normal.push(255);
+        }
+    }
+    LeafMaps {
+        front: front.finish(),
+        back: back.finish(),
+        normal: LeafTexture {
+            width: w,
+            height: n,
+            rgba: normal,
+        },
     }
 }
 
@@ -51,46 +193,55 @@ fn scale3(a: [f32; 3], k: f32) -> [f32; 3] {
 /// A float RGBA canvas in card units: x ∈ [0, 1] across (scaled by the card aspect so that
 /// shapes are not stretched), t ∈ [0, 1] from the base (bottom row) to the tip (top row).
 struct Canvas {
+    /// Width in texels.
     n: u32,
+    /// Height in texels.
+    h: u32,
     aspect: f32,
     buf: Vec<[f32; 4]>,
 }
 
 impl Canvas {
     fn new(n: u32, aspect: f32) -> Self {
+        Self::with_size(n, n, aspect)
+    }
+
+    /// A `w` × `h` canvas (texels as square as the card: w ≈ h · aspect for single leaves).
+    fn with_size(w: u32, h: u32, aspect: f32) -> Self {
         Canvas {
-            n,
+            n: w,
+            h,
             aspect,
-            buf: vec![[0.0; 4]; (n * n) as usize],
+            buf: vec![[0.0; 4]; (w * h) as usize],
         }
     }
 
     /// Metric position of texel (x, y): (across in card lengths, up in card lengths).
     fn pos(&self, x: u32, y: u32) -> [f32; 2] {
-        let n = self.n as f32;
         [
-            ((x as f32 + 0.5) / n - 0.5) * self.aspect,
-            1.0 - (y as f32 + 0.5) / n,
+            ((x as f32 + 0.5) / self.n as f32 - 0.5) * self.aspect,
+            1.0 - (y as f32 + 0.5) / self.h as f32,
         ]
     }
 
     /// Texel range covering metric box [lo, hi] (with a margin of one texel).
     fn range(&self, lo: [f32; 2], hi: [f32; 2]) -> (u32, u32, u32, u32) {
-        let n = self.n as f32;
+        let (n, h) = (self.n as f32, self.h as f32);
         let fx = |u: f32| ((u / self.aspect + 0.5) * n).floor();
-        let fy = |t: f32| ((1.0 - t) * n).floor();
-        let c = |v: f32| v.clamp(0.0, n - 1.0) as u32;
+        let fy = |t: f32| ((1.0 - t) * h).floor();
+        let cx = |v: f32| v.clamp(0.0, n - 1.0) as u32;
+        let cy = |v: f32| v.clamp(0.0, h - 1.0) as u32;
         (
-            c(fx(lo[0]) - 1.0),
-            c(fx(hi[0]) + 1.0),
-            c(fy(hi[1]) - 1.0),
-            c(fy(lo[1]) + 1.0),
+            cx(fx(lo[0]) - 1.0),
+            cx(fx(hi[0]) + 1.0),
+            cy(fy(hi[1]) - 1.0),
+            cy(fy(lo[1]) + 1.0),
         )
     }
 
-    /// One texel's size in card lengths.
+    /// One texel's size in card lengths (along the card).
     fn texel(&self) -> f32 {
-        1.0 / self.n as f32
+        1.0 / self.h as f32
     }
 
     /// Composites colour `c` with coverage `a` over texel (x, y).
@@ -215,7 +366,7 @@ impl Canvas {
         }
         LeafTexture {
             width: self.n,
-            height: self.n,
+            height: self.h,
             rgba,
         }
     }
@@ -344,6 +495,40 @@ fn needles(n: u32) -> LeafTexture {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn single_leaves_have_two_sides_and_a_normal_map() {
+        for kind in [LeafKind::Chestnut, LeafKind::Beech] {
+            let m = leaf_maps(kind);
+            assert_eq!(m.front.width, m.back.width);
+            // Same cut-out on both sides.
+            let alpha = |t: &LeafTexture| t.rgba.chunks_exact(4).map(|p| p[3]).collect::<Vec<_>>();
+            assert_eq!(alpha(&m.front), alpha(&m.back), "{kind:?}");
+            let c = coverage(&m.front);
+            assert!((0.3..0.8).contains(&c), "{kind:?}: coverage {c}");
+            // The back is paler than the front.
+            let mean = |t: &LeafTexture| {
+                let v: Vec<&[u8]> = t.rgba.chunks_exact(4).filter(|p| p[3] >= 128).collect();
+                v.iter()
+                    .map(|p| p[0] as f64 + p[1] as f64 + p[2] as f64)
+                    .sum::<f64>()
+                    / v.len() as f64
+            };
+            assert!(
+                mean(&m.back) > 1.3 * mean(&m.front),
+                "{kind:?}: back not paler"
+            );
+            // The normal map bends somewhere (veins) and is unit length everywhere.
+            let mut bent = 0;
+            for p in m.normal.rgba.chunks_exact(4) {
+                let v = [p[0], p[1], p[2]].map(|c| c as f32 / 127.5 - 1.0);
+                let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+                assert!((l - 1.0).abs() < 0.03 && v[2] > 0.0, "{kind:?}: {v:?}");
+                bent += (v[2] < 0.97) as usize;
+            }
+            assert!(bent > 500, "{kind:?}: only {bent} texels off flat");
+        }
+    }
 
     #[test]
     fn cards_are_mostly_opaque() {

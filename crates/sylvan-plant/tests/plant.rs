@@ -330,3 +330,141 @@ fn twig_width_skips_thin_wood() {
     let e = err("iterations: 0\nangle: 90\ntwig: -1\naxiom: F\n");
     assert!(e.contains("bad.lsys:3:") && e.contains("twig"), "{e}");
 }
+
+/// The broadleaf presets with individual leaves (issue #16): leaf and triangle counts in
+/// GPSS07's range, 2–10 triangles per leaf, every leaf on a petiole hanging from a drawn twig,
+/// and the same plant every time.
+#[test]
+fn broadleaf_presets_have_individual_leaves_on_petioles() {
+    use sylvan_plant::turtle;
+    for name in ["chestnut", "beech"] {
+        let t = Instant::now();
+        let p = preset(name).unwrap();
+        let s = p.stats();
+        eprintln!("{name}: {s:?} in {:?}", t.elapsed());
+        assert!(
+            (10_000..=25_000).contains(&s.leaves),
+            "{name}: {} leaves",
+            s.leaves
+        );
+        assert!(
+            (60_000..=250_000).contains(&s.triangles),
+            "{name}: {} triangles",
+            s.triangles
+        );
+        // Each leaf is its own small mesh of 2–10 triangles.
+        let firsts = &p.hierarchy.leaf_first_index;
+        assert_eq!(firsts.len(), s.leaves + 1);
+        for w in firsts.windows(2) {
+            let tris = (w[1] - w[0]) / 3;
+            assert!(
+                (2..=10).contains(&tris),
+                "{name}: a leaf of {tris} triangles"
+            );
+        }
+        assert_eq!(*firsts.last().unwrap() as usize, p.leaves.indices.len());
+        // Front, back and normal map, all the same size.
+        for t in [&p.leaf_back, &p.leaf_normal] {
+            assert_eq!(
+                (t.width, t.height),
+                (p.leaf_texture.width, p.leaf_texture.height)
+            );
+        }
+        // Every leaf starts at a point of a drawn twig (the end of an internode), and the
+        // start of its mesh is its petiole: opaque in the texture at the mesh's base.
+        let src = sylvan_plant::preset_source(name).unwrap();
+        let ls = LSystem::parse(src, name).unwrap();
+        let interp = turtle::interpret(&ls, &ls.derive().unwrap()).unwrap();
+        let sk = &interp.skeleton;
+        let key = |v: glam::Vec3| (v * 1e4).round().as_ivec3().to_array();
+        let drawn: std::collections::HashSet<[i32; 3]> = sk
+            .segments
+            .iter()
+            .flat_map(|s| s.iter().map(|&i| key(sk.points[i as usize].pos)))
+            .collect();
+        assert_eq!(sk.leaves.len(), s.leaves);
+        for (i, l) in sk.leaves.iter().enumerate() {
+            assert!(
+                drawn.contains(&key(l.pos)),
+                "{name}: leaf {i} hangs in the air"
+            );
+        }
+        let tex = &p.leaf_texture;
+        let per_leaf = p.leaves.positions.len() / s.leaves;
+        for i in (0..s.leaves).step_by(97) {
+            let base = i * per_leaf;
+            let uv = p.leaves.uvs[base];
+            assert!(
+                uv[1] > 0.99,
+                "{name}: leaf {i} does not start at its petiole"
+            );
+            let q = glam::Vec3::from(p.leaves.positions[base]);
+            assert!(
+                (q - sk.leaves[i].pos).length() < 1e-4,
+                "{name}: leaf {i} base"
+            );
+        }
+        // The petiole in the texture: opaque just above the bottom edge, in the middle.
+        let (x, y) = (tex.width / 2, tex.height - 4);
+        assert!(
+            tex.rgba[((y * tex.width + x) * 4 + 3) as usize] >= 128,
+            "{name}: no petiole"
+        );
+        // Deterministic.
+        let q = preset(name).unwrap();
+        assert_eq!(p.leaves, q.leaves, "{name}");
+        assert_eq!(p.wood, q.wood, "{name}");
+        let h = p.bbox_max[1] - p.bbox_min[1];
+        let w = (p.bbox_max[0] - p.bbox_min[0]).max(p.bbox_max[2] - p.bbox_min[2]);
+        eprintln!("{name}: {h:.1} m tall, {w:.1} m wide");
+        match name {
+            "chestnut" => assert!(w > 0.7 * h && h > 10.0, "chestnut: broad crown, {w} × {h}"),
+            _ => assert!(h > w && h > 12.0, "beech: taller than wide, {w} × {h}"),
+        }
+    }
+}
+
+#[test]
+fn blade_header_is_checked() {
+    for (src, want) in [
+        (
+            "iterations: 0\nangle: 30\nleaves: chestnut\nblade: 3 20 30\naxiom: ~\n",
+            "bad.lsys:4:8: blade rows must be 1 or 2",
+        ),
+        (
+            "iterations: 0\nangle: 30\nleaves: beech\nblade: 1 95 0\naxiom: ~\n",
+            "bad.lsys:4:10: blade fold must be 0–80 degrees",
+        ),
+        (
+            "iterations: 0\nangle: 30\nleaves: beech\nblade: 1 10\naxiom: ~\n",
+            "bad.lsys:4:8: blade needs 3 numbers",
+        ),
+        (
+            "iterations: 0\nangle: 30\nleaves: beech\nblade: 1 x 0\naxiom: ~\n",
+            "bad.lsys:4:10:",
+        ),
+        (
+            "iterations: 0\nangle: 30\nblade: 2 20 30\naxiom: ~\n",
+            "bad.lsys:3:8: `blade:` shapes single leaves",
+        ),
+        (
+            "iterations: 0\nangle: 30\nleaves: maple\naxiom: ~\n",
+            "bad.lsys:3:9: unknown leaf kind",
+        ),
+    ] {
+        let e = err(src);
+        assert!(e.starts_with(want), "{src:?}: {e}");
+    }
+    // One leaf: 8 triangles (2 rows) or 4 (1 row), facing U.
+    for (rows, tris) in [(2, 8), (1, 4)] {
+        let src = format!(
+            "iterations: 0\nangle: 30\nleaves: chestnut\nblade: {rows} 20 30\naxiom: ~(0.2)\n"
+        );
+        let p = from_lsystem(&LSystem::parse(&src, "one.lsys").unwrap(), "one").unwrap();
+        assert_eq!(p.leaves.triangle_count(), tris);
+        assert_eq!(p.leaf_count, 1);
+        let n: f32 =
+            p.leaves.normals.iter().map(|n| n[2]).sum::<f32>() / p.leaves.normals.len() as f32;
+        assert!(n > 0.7, "the leaf faces +Z: mean normal z {n}");
+    }
+}

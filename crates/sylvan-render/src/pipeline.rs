@@ -123,7 +123,7 @@ pub fn shader_sources() -> Vec<(&'static str, String)> {
     let mut out = vec![
         ("sky", with_frame(include_str!("shaders/sky.wgsl"))),
         ("terrain", with_frame(include_str!("shaders/terrain.wgsl"))),
-        ("bake", include_str!("bake/bake.wgsl").to_string()),
+        ("bake", crate::bake::shader_source()),
     ];
     for e in crate::technique::registry::REGISTRY {
         out.extend((e.shaders)());

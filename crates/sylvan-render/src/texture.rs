@@ -25,9 +25,20 @@ fn coverage(rgba: &[u8], scale: f32) -> f32 {
 /// fraction of texels passing the 0.5 alpha test matches level 0 (coverage-preserving mips;
 /// without it, alpha-tested foliage thins out with distance).
 pub fn cutout_mips(base: Level) -> Vec<Level> {
+    cutout_mips_to(base, 1)
+}
+
+/// [`cutout_mips`] down to the first level whose shorter side is `min_side` texels (or the
+/// base level if it is smaller). Leaf textures stop at 4: below that a level has too few
+/// texels to keep its coverage (a 1×1 level is all in or all out), and sub-pixel leaves
+/// sampling a 4-texel-wide level keep the crown's coverage on average instead of vanishing.
+pub fn cutout_mips_to(base: Level, min_side: u32) -> Vec<Level> {
     let target = coverage(&base.rgba, 1.0);
     let mut levels = vec![base];
-    while let Some(prev) = levels.last().filter(|l| l.width > 1 || l.height > 1) {
+    while let Some(prev) = levels
+        .last()
+        .filter(|l| (l.width > 1 || l.height > 1) && l.width.min(l.height) > min_side)
+    {
         let (w, h) = ((prev.width / 2).max(1), (prev.height / 2).max(1));
         let mut rgba = vec![0u8; (w * h * 4) as usize];
         for y in 0..h {
@@ -76,8 +87,52 @@ pub fn cutout_mips(base: Level) -> Vec<Level> {
     levels
 }
 
+/// Builds a mip chain for a tangent-space normal map (RGB = n · 0.5 + 0.5): each level is the
+/// 2×2 mean of the one above, renormalised (so far leaves shade with their mean normal).
+pub fn normal_mips(base: Level) -> Vec<Level> {
+    let mut levels = vec![base];
+    while let Some(prev) = levels.last().filter(|l| l.width > 1 || l.height > 1) {
+        let (w, h) = ((prev.width / 2).max(1), (prev.height / 2).max(1));
+        let mut rgba = vec![255u8; (w * h * 4) as usize];
+        for y in 0..h {
+            for x in 0..w {
+                let mut n = [0f32; 3];
+                for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                    let sx = (2 * x + dx).min(prev.width - 1);
+                    let sy = (2 * y + dy).min(prev.height - 1);
+                    let p = &prev.rgba[((sy * prev.width + sx) * 4) as usize..][..3];
+                    for c in 0..3 {
+                        n[c] += p[c] as f32 / 127.5 - 1.0;
+                    }
+                }
+                let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt().max(1e-6);
+                let o = ((y * w + x) * 4) as usize;
+                for c in 0..3 {
+                    rgba[o + c] = ((n[c] / len * 0.5 + 0.5) * 255.0).round() as u8;
+                }
+            }
+        }
+        levels.push(Level {
+            width: w,
+            height: h,
+            rgba,
+        });
+    }
+    levels
+}
+
 /// Uploads a mip chain as an `Rgba8UnormSrgb` 2D texture.
 pub fn upload(gpu: &sylvan_gpu::Gpu, label: &str, levels: &[Level]) -> wgpu::Texture {
+    upload_as(gpu, label, levels, wgpu::TextureFormat::Rgba8UnormSrgb)
+}
+
+/// Uploads a mip chain as a 2D texture of `format` (an RGBA8 format).
+pub fn upload_as(
+    gpu: &sylvan_gpu::Gpu,
+    label: &str,
+    levels: &[Level],
+    format: wgpu::TextureFormat,
+) -> wgpu::Texture {
     let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
         size: wgpu::Extent3d {
@@ -88,7 +143,7 @@ pub fn upload(gpu: &sylvan_gpu::Gpu, label: &str, levels: &[Level]) -> wgpu::Tex
         mip_level_count: levels.len() as u32,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rgba8UnormSrgb,
+        format,
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });
@@ -116,6 +171,20 @@ pub fn upload(gpu: &sylvan_gpu::Gpu, label: &str, levels: &[Level]) -> wgpu::Tex
     texture
 }
 
+/// The shortest side of a single-leaf texture's last mip level ([`cutout_mips_to`]).
+pub const LEAF_MIN_MIP: u32 = 4;
+
+/// The last mip level's shortest side for a plant's leaf images: [`LEAF_MIN_MIP`] for single
+/// leaves (plants with a back image), 1 (the full chain, as before) for leaf cards, whose
+/// measured figures and tests were set with it.
+fn leaf_min_mip(plant: &sylvan_plant::Plant) -> u32 {
+    if plant.leaf_back.rgba.is_empty() {
+        1
+    } else {
+        LEAF_MIN_MIP
+    }
+}
+
 /// Checks a plant's leaf texture against its data and the device, and uploads it with
 /// coverage-preserving mips; returns the texture and its bytes (all levels).
 pub fn upload_leaf_texture(
@@ -132,18 +201,127 @@ pub fn upload_leaf_texture(
         )));
     }
     gpu.check_texture_size("leaf texture", tex.width, tex.height)?;
-    let levels = cutout_mips(Level {
-        width: tex.width,
-        height: tex.height,
-        rgba: tex.rgba.clone(),
-    });
+    let levels = cutout_mips_to(
+        Level {
+            width: tex.width,
+            height: tex.height,
+            rgba: tex.rgba.clone(),
+        },
+        leaf_min_mip(plant),
+    );
     let bytes = levels.iter().map(|l| l.rgba.len() as u64).sum();
     Ok((upload(gpu, label, &levels), bytes))
+}
+
+/// A plant's leaf images on the GPU: front and back colour (sRGB, coverage-preserving mips of
+/// the same alpha) and the tangent-space normal map (linear). A plant without a back image
+/// gets its front image again, one without a normal map a flat 1×1 one.
+pub struct LeafMaterial {
+    /// Front side (its alpha is the cut-out of both sides).
+    pub front: wgpu::TextureView,
+    /// Back side.
+    pub back: wgpu::TextureView,
+    /// Normal map.
+    pub normal: wgpu::TextureView,
+    /// GPU bytes of all three (all levels).
+    pub bytes: u64,
+}
+
+/// Checks and uploads a plant's leaf images ([`LeafMaterial`]).
+pub fn upload_leaf_material(
+    gpu: &sylvan_gpu::Gpu,
+    label: &str,
+    plant: &sylvan_plant::Plant,
+) -> Result<LeafMaterial, crate::RenderError> {
+    let (front, mut bytes) = upload_leaf_texture(gpu, label, plant)?;
+    let front_size = (plant.leaf_texture.width, plant.leaf_texture.height);
+    let check = |t: &sylvan_plant::LeafTexture, what: &str| {
+        if t.rgba.len() != (t.width as usize * t.height as usize * 4)
+            || (t.width, t.height) != front_size
+        {
+            return Err(crate::RenderError::Plant(format!(
+                "{}: leaf {what} image size does not match the front image or its data",
+                plant.name
+            )));
+        }
+        Ok(())
+    };
+    let back = if plant.leaf_back.rgba.is_empty() {
+        front.create_view(&Default::default())
+    } else {
+        check(&plant.leaf_back, "back")?;
+        let levels = cutout_mips_to(
+            Level {
+                width: plant.leaf_back.width,
+                height: plant.leaf_back.height,
+                rgba: plant.leaf_back.rgba.clone(),
+            },
+            leaf_min_mip(plant),
+        );
+        bytes += levels.iter().map(|l| l.rgba.len() as u64).sum::<u64>();
+        upload(gpu, &format!("{label}_back"), &levels).create_view(&Default::default())
+    };
+    let normal_base = if plant.leaf_normal.rgba.is_empty() {
+        Level {
+            width: 1,
+            height: 1,
+            rgba: vec![128, 128, 255, 255],
+        }
+    } else {
+        check(&plant.leaf_normal, "normal-map")?;
+        Level {
+            width: plant.leaf_normal.width,
+            height: plant.leaf_normal.height,
+            rgba: plant.leaf_normal.rgba.clone(),
+        }
+    };
+    let levels = normal_mips(normal_base);
+    bytes += levels.iter().map(|l| l.rgba.len() as u64).sum::<u64>();
+    let normal = upload_as(
+        gpu,
+        &format!("{label}_normal"),
+        &levels,
+        wgpu::TextureFormat::Rgba8Unorm,
+    )
+    .create_view(&Default::default());
+    Ok(LeafMaterial {
+        front: front.create_view(&Default::default()),
+        back,
+        normal,
+        bytes,
+    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn normal_mips_stay_unit() {
+        // A ridge: left half tilted one way, right half the other; the mean is flat.
+        let mut rgba = vec![0u8; 8 * 8 * 4];
+        for (i, p) in rgba.chunks_exact_mut(4).enumerate() {
+            let x = if i % 8 < 4 { -0.6f32 } else { 0.6 };
+            let z = (1.0 - x * x).sqrt();
+            p.copy_from_slice(&[
+                ((x * 0.5 + 0.5) * 255.0) as u8,
+                128,
+                ((z * 0.5 + 0.5) * 255.0) as u8,
+                255,
+            ]);
+        }
+        let levels = normal_mips(Level {
+            width: 8,
+            height: 8,
+            rgba,
+        });
+        assert_eq!(levels.len(), 4);
+        let last = &levels[3].rgba;
+        assert!(
+            (last[0] as i32 - 128).abs() <= 2 && last[2] >= 253,
+            "{last:?}"
+        );
+    }
 
     #[test]
     fn mips_preserve_alpha_test_coverage() {

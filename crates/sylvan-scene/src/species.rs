@@ -15,7 +15,7 @@ use toml::Spanned;
 
 /// The plant presets `sylvan-plant` builds (its `preset_source`), checked when the scene is read
 /// so an unknown one names its scene line.
-pub const PRESETS: [&str; 3] = ["pine", "prunus", "bush"];
+pub const PRESETS: [&str; 5] = ["pine", "prunus", "bush", "chestnut", "beech"];
 
 /// Tallest tree accepted, metres (the tallest living tree is ~116 m): species `height_m` and a
 /// positions CSV's `height` column are checked against it.

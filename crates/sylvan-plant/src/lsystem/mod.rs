@@ -45,14 +45,63 @@ pub fn is_module_symbol(c: char) -> bool {
     c.is_ascii_alphanumeric() || TURTLE_SYMBOLS.contains(c)
 }
 
-/// Which texture the leaves (`~`) of a plant carry.
+/// Which texture the leaves (`~`) of a plant carry, and whether a `~` is a card carrying many
+/// leaves (`Broadleaf`, `Needles`) or one real leaf (`Chestnut`, `Beech`: a leaf mesh of 4 or
+/// 8 triangles, petiole included, with front, back and normal-map images).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum LeafKind {
-    /// A broad serrated leaf (prunus, bush).
+    /// A card with a cluster of nine broad serrated leaves (prunus, bush).
     #[default]
     Broadleaf,
-    /// A tuft of needles on one quad (pine).
+    /// A card with a needle-covered shoot spray (pine).
     Needles,
+    /// One sweet-chestnut leaf: oblong-lanceolate, coarsely serrated, on a short petiole.
+    Chestnut,
+    /// One beech leaf: ovate, wavy-edged, on a short petiole.
+    Beech,
+}
+
+impl LeafKind {
+    /// True for the kinds whose `~` is one leaf (meshed as a [`Blade`]), not a card.
+    pub fn is_single_leaf(self) -> bool {
+        matches!(self, LeafKind::Chestnut | LeafKind::Beech)
+    }
+
+    /// The blade used when the file has no `blade:` line.
+    pub fn default_blade(self) -> Blade {
+        match self {
+            LeafKind::Chestnut => Blade {
+                rows: 2,
+                fold: 20.0,
+                curl: 30.0,
+            },
+            LeafKind::Beech => Blade {
+                rows: 1,
+                fold: 12.0,
+                curl: 0.0,
+            },
+            _ => Blade {
+                rows: 0,
+                fold: 0.0,
+                curl: 0.0,
+            },
+        }
+    }
+}
+
+/// How a single leaf (`~` with `leaves: chestnut` or `beech`) is meshed (`blade: ROWS FOLD
+/// CURL`): a point at the petiole's base, `rows` rows of three vertices across the blade (left
+/// edge, midrib, right edge), a point at the tip — 4 triangles for one row, 8 for two. The
+/// halves rise by `fold` degrees from the midrib (a V), and the midrib bends by `curl` degrees
+/// from base to tip towards the leaf's back (a drooping tip). Rows 0 means a flat card.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Blade {
+    /// Rows of vertices across the blade: 1 or 2 (0: the card quad of the card kinds).
+    pub rows: u32,
+    /// Fold of each half about the midrib, degrees (0–80).
+    pub fold: f64,
+    /// Bend of the midrib from base to tip, degrees (−90–90; positive droops the tip).
+    pub curl: f64,
 }
 
 /// One module of a derived string: symbol, parameter count and offset into [`Word::params`].
@@ -214,6 +263,8 @@ pub struct LSystem {
     pub leaf_size: f64,
     /// `leaves:` the leaf texture kind.
     pub leaf_kind: LeafKind,
+    /// `blade:` the mesh of a single leaf (the kind's default when absent; rows 0 for cards).
+    pub blade: Blade,
     /// `twig:` thinnest branch diameter drawn as wood, metres (default 0: all). An `F` whose
     /// diameter is below it moves the turtle without drawing (leaf cards carry such twigs in
     /// their texture) and is not counted as an internode.

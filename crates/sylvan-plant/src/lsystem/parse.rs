@@ -4,13 +4,13 @@
 use super::cursor::Cursor;
 use super::expr::{Expr, ParseError, Scope, parse_expr, perr};
 use super::{
-    DEFAULT_LIMIT, LSystem, LeafKind, MAX_ITERATIONS, MAX_LIMIT, MAX_PARAMS, MAX_SOURCE_BYTES,
-    Pattern, Production, SuccModule, TURTLE_SYMBOLS, Word, is_module_symbol,
+    Blade, DEFAULT_LIMIT, LSystem, LeafKind, MAX_ITERATIONS, MAX_LIMIT, MAX_PARAMS,
+    MAX_SOURCE_BYTES, Pattern, Production, SuccModule, TURTLE_SYMBOLS, Word, is_module_symbol,
 };
 use crate::PlantError;
 use crate::error::Pos;
 
-const KEYS: &str = "name, iterations, angle, step, width, taper, leaf, leaves, twig, seed, limit, \
+const KEYS: &str = "name, iterations, angle, step, width, taper, leaf, leaves, blade, twig, seed, limit, \
                     tropism, ignore, define, axiom";
 
 fn to_err(file: &str, e: ParseError) -> PlantError {
@@ -50,6 +50,7 @@ pub(super) fn parse(src: &str, file: &str) -> Result<LSystem, PlantError> {
         taper: 0.7,
         leaf_size: f64::NAN,
         leaf_kind: LeafKind::Broadleaf,
+        blade: LeafKind::Broadleaf.default_blade(),
         twig: 0.0,
         seed: 0,
         limit: DEFAULT_LIMIT,
@@ -60,6 +61,7 @@ pub(super) fn parse(src: &str, file: &str) -> Result<LSystem, PlantError> {
     };
     let mut consts: Vec<(String, f64)> = Vec::new();
     let mut axiom_src: Option<(String, u32, u32)> = None;
+    let mut blade_src: Option<(Blade, Pos)> = None;
     let (mut seen_iter, mut seen_angle) = (false, false);
     let lines: Vec<&str> = src.lines().collect();
     // Pass 1: the header (defines must come before their use, productions may come anywhere).
@@ -202,13 +204,70 @@ pub(super) fn parse(src: &str, file: &str) -> Result<LSystem, PlantError> {
                 ls.leaf_kind = match c.rest().trim() {
                     "broadleaf" => LeafKind::Broadleaf,
                     "needles" => LeafKind::Needles,
+                    "chestnut" => LeafKind::Chestnut,
+                    "beech" => LeafKind::Beech,
                     _ => {
                         return Err(bad(
                             "unknown leaf kind",
-                            "use `leaves: broadleaf` or `leaves: needles`",
+                            "use `leaves: broadleaf`, `needles`, `chestnut` or `beech`",
                         ));
                     }
                 }
+            }
+            "blade" => {
+                // `blade: ROWS FOLD CURL`, space-separated constants.
+                let fix = "e.g. `blade: 2 20 30` (rows 1 or 2, fold 0–80°, curl −90–90°)";
+                let mut vals = Vec::new();
+                let mut col = c.pos().col - 1;
+                for piece in c.rest().split([' ', '\t']) {
+                    if !piece.is_empty() {
+                        let mut pc = Cursor::new(piece, lno, col);
+                        let e = parse_expr(&mut pc, &scope).map_err(|e| to_err(file, e))?;
+                        let (Expr::Num(v), true) = (e, pc.at_end()) else {
+                            return Err(PlantError::at(
+                                file,
+                                Pos {
+                                    line: lno,
+                                    col: col + 1,
+                                },
+                                "blade values must be numbers",
+                                fix,
+                            ));
+                        };
+                        vals.push((v, col + 1));
+                    }
+                    col += piece.chars().count() as u32 + 1;
+                }
+                let at = |i: usize, what: &str| {
+                    PlantError::at(
+                        file,
+                        Pos {
+                            line: lno,
+                            col: vals.get(i).map_or(vpos.col, |v| v.1),
+                        },
+                        what,
+                        fix,
+                    )
+                };
+                if vals.len() != 3 {
+                    return Err(at(3, "blade needs 3 numbers: rows fold curl"));
+                }
+                let (rows, fold, curl) = (vals[0].0, vals[1].0, vals[2].0);
+                if !(rows == 1.0 || rows == 2.0) {
+                    return Err(at(0, "blade rows must be 1 or 2 (4 or 8 triangles)"));
+                }
+                if !(0.0..=80.0).contains(&fold) {
+                    return Err(at(1, "blade fold must be 0–80 degrees"));
+                }
+                if !(-90.0..=90.0).contains(&curl) {
+                    return Err(at(2, "blade curl must be −90–90 degrees"));
+                }
+                let blade = Blade {
+                    rows: rows as u32,
+                    fold,
+                    curl,
+                };
+                blade_src = Some((blade, vpos));
             }
             "ignore" => {
                 while !c.at_end() {
@@ -277,6 +336,18 @@ pub(super) fn parse(src: &str, file: &str) -> Result<LSystem, PlantError> {
             "add e.g. `angle: 25.7` (degrees)",
         ));
     }
+    ls.blade = match blade_src {
+        Some((_, pos)) if !ls.leaf_kind.is_single_leaf() => {
+            return Err(PlantError::at(
+                file,
+                pos,
+                "`blade:` shapes single leaves, but these leaves are cards",
+                "add `leaves: chestnut` or `leaves: beech`, or remove the `blade:` line",
+            ));
+        }
+        Some((b, _)) => b,
+        None => ls.leaf_kind.default_blade(),
+    };
     if ls.width.is_nan() {
         ls.width = ls.step / 10.0;
     }

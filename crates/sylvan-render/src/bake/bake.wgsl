@@ -11,6 +11,9 @@ struct BakeView {
 @group(0) @binding(0) var<storage, read> views: array<BakeView>;
 @group(0) @binding(1) var leaf_texture: texture_2d<f32>;
 @group(0) @binding(2) var leaf_sampler: sampler;
+// The back side of the leaves and their normal map (`shaders/leaf.wgsl`, prepended).
+@group(0) @binding(3) var leaf_back: texture_2d<f32>;
+@group(0) @binding(4) var leaf_normal_map: texture_2d<f32>;
 
 struct VIn {
     @location(0) position: vec3<f32>,
@@ -27,6 +30,8 @@ struct VOut {
     @location(2) color: vec3<f32>,
     @location(3) depth: f32,
     @location(4) @interpolate(flat) view: u32,
+    // The plant-space position (for the normal map's tangent frame).
+    @location(5) model: vec3<f32>,
 };
 
 struct Targets {
@@ -43,6 +48,7 @@ fn vs_bake(in: VIn) -> VOut {
     out.color = in.color;
     out.depth = out.pos.z;
     out.view = in.view;
+    out.model = in.position;
     return out;
 }
 
@@ -51,15 +57,26 @@ fn facing(n: vec3<f32>, view: u32) -> vec3<f32> {
     return select(m, -m, dot(m, views[view].to_camera.xyz) < 0.0);
 }
 
+// A leaf as `geometry` shades it: the front or, seen from behind, the back image, and the
+// normal bent by the normal map then turned towards the camera.
 @fragment
 fn fs_bake_leaf(in: VOut) -> Targets {
+    let dp_dx = dpdx(in.model);
+    let dp_dy = dpdy(in.model);
+    let duv_dx = dpdx(in.uv);
+    let duv_dy = dpdy(in.uv);
     let tex = textureSample(leaf_texture, leaf_sampler, in.uv);
+    let back = textureSample(leaf_back, leaf_sampler, in.uv);
+    let bump = textureSample(leaf_normal_map, leaf_sampler, in.uv).rgb;
     if (tex.a < 0.5) {
         discard;
     }
+    let n = normalize(in.normal);
+    let behind = dot(n, views[in.view].to_camera.xyz) < 0.0;
+    let bent = leaf_bumped_normal(n, dp_dx, dp_dy, duv_dx, duv_dy, bump);
     var out: Targets;
-    out.albedo = vec4<f32>(tex.rgb * in.color, 1.0);
-    out.normal_depth = vec4<f32>(facing(in.normal, in.view), clamp(in.depth, 0.0, 1.0));
+    out.albedo = vec4<f32>(select(tex.rgb, back.rgb, behind) * in.color, 1.0);
+    out.normal_depth = vec4<f32>(select(bent, -bent, behind), clamp(in.depth, 0.0, 1.0));
     return out;
 }
 

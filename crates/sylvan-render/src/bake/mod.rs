@@ -88,7 +88,7 @@ pub struct PlantBaker {
     leaf_pipeline: wgpu::RenderPipeline,
     wood_pipeline: wgpu::RenderPipeline,
     bind_layout: wgpu::BindGroupLayout,
-    leaf_view: wgpu::TextureView,
+    leaf_maps: texture::LeafMaterial,
     sampler: wgpu::Sampler,
     tile: u32,
     ss: u32,
@@ -105,9 +105,7 @@ impl PlantBaker {
         }
         gpu.check_texture_size("bake tile", tile * ss, tile * ss)?;
         let device = &gpu.device;
-        let leaf_view = texture::upload_leaf_texture(gpu, "bake_leaf_texture", plant)?
-            .0
-            .create_view(&Default::default());
+        let leaf_maps = texture::upload_leaf_material(gpu, "bake_leaf_texture", plant)?;
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("bake_sampler"),
             mag_filter: wgpu::FilterMode::Linear,
@@ -139,9 +137,21 @@ impl PlantBaker {
                     wgpu::ShaderStages::FRAGMENT,
                     wgpu::SamplerBindingType::Filtering,
                 ),
+                layout::texture(
+                    3,
+                    wgpu::ShaderStages::FRAGMENT,
+                    wgpu::TextureSampleType::Float { filterable: true },
+                    wgpu::TextureViewDimension::D2,
+                ),
+                layout::texture(
+                    4,
+                    wgpu::ShaderStages::FRAGMENT,
+                    wgpu::TextureSampleType::Float { filterable: true },
+                    wgpu::TextureViewDimension::D2,
+                ),
             ],
         });
-        let module = sylvan_gpu::shader(gpu, "bake", include_str!("bake.wgsl"));
+        let module = sylvan_gpu::shader(gpu, "bake", &shader_source());
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("bake"),
             bind_group_layouts: &[Some(&bind_layout)],
@@ -189,7 +199,7 @@ impl PlantBaker {
             leaf_pipeline: make("fs_bake_leaf"),
             wood_pipeline: make("fs_bake_wood"),
             bind_layout,
-            leaf_view,
+            leaf_maps,
             sampler,
             tile,
             ss,
@@ -251,11 +261,19 @@ impl PlantBaker {
                 },
                 wgpu::BindGroupEntry {
                     binding: 1,
-                    resource: wgpu::BindingResource::TextureView(&self.leaf_view),
+                    resource: wgpu::BindingResource::TextureView(&self.leaf_maps.front),
                 },
                 wgpu::BindGroupEntry {
                     binding: 2,
                     resource: wgpu::BindingResource::Sampler(&self.sampler),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::TextureView(&self.leaf_maps.back),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: wgpu::BindingResource::TextureView(&self.leaf_maps.normal),
                 },
             ],
         });
@@ -364,6 +382,16 @@ impl PlantBaker {
     }
 }
 
+/// The baker's WGSL as compiled: the shared leaf material (`shaders/leaf.wgsl`), then
+/// `bake.wgsl`.
+pub(crate) fn shader_source() -> String {
+    concat!(
+        include_str!("../shaders/leaf.wgsl"),
+        include_str!("bake.wgsl")
+    )
+    .to_string()
+}
+
 /// Where baked assets are cached.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub enum CachePolicy {
@@ -466,8 +494,9 @@ pub fn plant_hash(plant: &Plant) -> u64 {
     let mut h = codec::Fnv64::default();
     mesh(&mut h, &plant.wood);
     mesh(&mut h, &plant.leaves);
-    let t = &plant.leaf_texture;
-    h.u32s(&[t.width, t.height]).field(&t.rgba);
+    for t in [&plant.leaf_texture, &plant.leaf_back, &plant.leaf_normal] {
+        h.u32s(&[t.width, t.height]).field(&t.rgba);
+    }
     h.f32s(&plant.bbox_min).f32s(&plant.bbox_max);
     let hier = &plant.hierarchy;
     h.u32s(&[hier.nodes.len() as u32])

@@ -115,6 +115,7 @@ pub fn test_tree() -> Plant {
         instancing: Default::default(),
         internodes: 1,
         leaf_count: 0,
+        ..Default::default()
     }
 }
 

@@ -13,7 +13,7 @@ use sylvan_render::registry::{self, BakeJob};
 pub struct BakeCmdArgs {
     /// A `.lsys`, `.glb`, `.gltf` or `.obj` file (or use --preset).
     pub source: Option<PathBuf>,
-    /// A built-in plant: pine, prunus or bush.
+    /// A built-in plant: pine, prunus, bush, chestnut or beech.
     #[arg(long, value_name = "NAME", conflicts_with = "source")]
     pub preset: Option<String>,
     /// The technique to bake for (`sylvan params` lists them).

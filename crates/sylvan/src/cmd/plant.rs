@@ -9,7 +9,7 @@ use std::path::PathBuf;
 pub struct PlantArgs {
     /// A `.lsys`, `.glb`, `.gltf` or `.obj` file (or use --preset).
     pub source: Option<PathBuf>,
-    /// A built-in plant: pine, prunus or bush.
+    /// A built-in plant: pine, prunus, bush, chestnut or beech.
     #[arg(long, value_name = "NAME", conflicts_with = "source")]
     pub preset: Option<String>,
     /// Write the plant as binary glTF (wood and leaves as separate meshes and materials).

@@ -42,7 +42,7 @@ fn instance_transform(in: PlantIn, inst: TreeInstance) -> PlantOut {
     out.color = in.color * vec3<f32>(tint, mix(tint, 1.0, 0.5), 1.0);
     // Crown self-occlusion for the sky term.
     out.ao = crown_occlusion(in.position, species.bbox_min.xyz, species.bbox_max.xyz);
-    let leaf = f32(in.vertex / 4u);
+    let leaf = f32(in.vertex / max(u32(species.bbox_min.w), 1u));
     out.keep = vec2<f32>(inst.rot.w, hash13(vec3<f32>(leaf, leaf * 0.37 + 11.0, inst.rot.z * 97.0)));
     return out;
 }
@@ -68,18 +68,28 @@ fn leaf_sample(uv: vec2<f32>) -> vec4<f32> {
 
 @fragment
 fn fs_leaf(in: PlantOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    // Derivatives and samples first, in uniform control flow.
+    let dp_dx = dpdx(in.world);
+    let dp_dy = dpdy(in.world);
+    let duv_dx = dpdx(in.uv);
+    let duv_dy = dpdy(in.uv);
     let tex = leaf_sample(in.uv);
+    let back = textureSample(leaf_back, leaf_sampler, in.uv);
+    let bump = textureSample(leaf_normal_map, leaf_sampler, in.uv).rgb;
     if (tex.a < 0.5 || leaf_dropped(in.keep)) {
         discard;
     }
-    var n = normalize(in.normal);
+    // Seen from behind: the back image, and the bent normal turned round.
+    var n = leaf_bumped_normal(normalize(in.normal), dp_dx, dp_dy, duv_dx, duv_dy, bump);
+    var rgb = tex.rgb;
     if (!front) {
         n = -n;
+        rgb = back.rgb;
     }
     let l = frame.sun_dir.xyz;
     let ndl = dot(n, l);
     let vis = sun_visibility(in.world, vec3<f32>(0.0));
-    let albedo = tex.rgb * in.color;
+    let albedo = rgb * in.color;
     // Front: Lambert. Back: diffuse transmission through the thin leaf, yellower.
     let translucency = species.bbox_max.w;
     let transmitted = albedo * vec3<f32>(1.1, 1.25, 0.55) * translucency * max(-ndl, 0.0);

@@ -2,7 +2,9 @@
 //! against. Not from a paper; it is the ground truth.
 //!
 //! Per species: one wood mesh (opaque, back-face culled) and one leaf mesh (alpha-tested with
-//! the plant's leaf texture, two-sided, front Lambert + back diffuse transmission), instanced
+//! the plant's leaf texture, two-sided: the front image or, seen from behind, the back image,
+//! both lit with the tangent-space normal map of `shaders/leaf.wgsl`; front Lambert + back
+//! diffuse transmission), instanced
 //! over the culled trees: two draw calls per species per pass, no per-frame allocation.
 //! Shadow casters use the same meshes with depth-only pipelines (leaves alpha-tested).
 //!
@@ -177,10 +179,20 @@ impl SpeciesMeshes {
         leaves: &Mesh,
     ) -> Result<Self, RenderError> {
         let device = &gpu.device;
-        let (texture, texture_bytes) = texture::upload_leaf_texture(gpu, "leaf_texture", plant)?;
-        let view = texture.create_view(&Default::default());
+        let maps = texture::upload_leaf_material(gpu, "leaf_texture", plant)?;
+        let texture_bytes = maps.bytes;
+        // Vertices per leaf, for the per-leaf hash of level-of-detail transitions.
+        let leaf_vertices = match plant.leaf_count {
+            0 => 4,
+            n => (plant.leaves.positions.len() / n).max(1),
+        };
         let raw = GpuSpecies {
-            bbox_min: [plant.bbox_min[0], plant.bbox_min[1], plant.bbox_min[2], 0.0],
+            bbox_min: [
+                plant.bbox_min[0],
+                plant.bbox_min[1],
+                plant.bbox_min[2],
+                leaf_vertices as f32,
+            ],
             bbox_max: [
                 plant.bbox_max[0],
                 plant.bbox_max[1],
@@ -199,7 +211,7 @@ impl SpeciesMeshes {
             entries: &[
                 wgpu::BindGroupEntry {
                     binding: 0,
-                    resource: wgpu::BindingResource::TextureView(&view),
+                    resource: wgpu::BindingResource::TextureView(&maps.front),
                 },
                 wgpu::BindGroupEntry {
                     binding: 1,
@@ -208,6 +220,14 @@ impl SpeciesMeshes {
                 wgpu::BindGroupEntry {
                     binding: 2,
                     resource: uniform.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::TextureView(&maps.back),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: wgpu::BindingResource::TextureView(&maps.normal),
                 },
             ],
         });
@@ -257,6 +277,18 @@ impl MeshPipelines {
                     wgpu::SamplerBindingType::Filtering,
                 ),
                 layout::uniform(2, wgpu::ShaderStages::VERTEX_FRAGMENT),
+                layout::texture(
+                    3,
+                    wgpu::ShaderStages::FRAGMENT,
+                    wgpu::TextureSampleType::Float { filterable: true },
+                    wgpu::TextureViewDimension::D2,
+                ),
+                layout::texture(
+                    4,
+                    wgpu::ShaderStages::FRAGMENT,
+                    wgpu::TextureSampleType::Float { filterable: true },
+                    wgpu::TextureViewDimension::D2,
+                ),
             ],
         });
         let sampler = crate::technique::common::trilinear_sampler(gpu, "leaf_sampler");
@@ -471,11 +503,12 @@ impl Geometry {
     }
 }
 
-/// The WGSL of `geometry` as compiled: the frame's group 0, `bindings.wgsl` (group 1), then
-/// `geometry.wgsl`.
+/// The WGSL of `geometry` as compiled: the frame's group 0, `bindings.wgsl` (group 1), the
+/// shared leaf material (`shaders/leaf.wgsl`), then `geometry.wgsl`.
 pub(crate) fn shader_source() -> String {
     crate::pipeline::with_frame(concat!(
         include_str!("bindings.wgsl"),
+        include_str!("../../shaders/leaf.wgsl"),
         include_str!("geometry.wgsl")
     ))
 }

@@ -98,10 +98,12 @@ fn split_object(
     };
     let out = Plant {
         name: format!("{} {what}", plant.name),
-        leaf_count: w.leaves.indices.len() / 6,
+        leaf_count: w.leaves.indices.len() / indices_per_leaf(plant),
         wood: w.wood,
         leaves: w.leaves,
         leaf_texture: plant.leaf_texture.clone(),
+        leaf_back: plant.leaf_back.clone(),
+        leaf_normal: plant.leaf_normal.clone(),
         bbox_min: min.to_array(),
         bbox_max: max.to_array(),
         hierarchy: Default::default(),
@@ -109,6 +111,11 @@ fn split_object(
         internodes: 0,
     };
     (w.stopped, out)
+}
+
+/// Indices of one leaf of `plant` (6 for a card, more for a single leaf's blade).
+fn indices_per_leaf(plant: &Plant) -> usize {
+    (plant.leaves.indices.len() / plant.leaf_count.max(1)).max(3)
 }
 
 /// Mean vertex position of a plant's wood and leaves (its frame's origin when empty).
