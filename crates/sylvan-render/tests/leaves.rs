@@ -27,6 +27,7 @@ fn a_leaf_seen_from_behind_shows_its_back_image() {
         height: 10.0,
         rotation: 0.0,
         species: 0,
+        seed: 0,
     };
     // The sun straight above: both sides of the vertical leaf get the same (grazing) light,
     // so what differs is the image.
