@@ -54,8 +54,8 @@ PY
   done
 }
 if [ "${PICTURES:-1}" = 1 ]; then
-  pictures "" default
-  for s in assets/scenes/eval/one-pine.toml assets/scenes/eval/one-fir.toml assets/scenes/example.toml; do
+  [ -n "${ONLY:-}" ] || pictures "" default
+  for s in ${ONLY:-assets/scenes/eval/*.toml assets/scenes/example.toml}; do
     pictures "$s" "$(basename "$s" .toml)"
   done
 fi

@@ -200,8 +200,12 @@ impl World {
         let reach = settings.tree_distance_m + settings.prefetch_m + tile_m * 1.5;
         let area = (std::f64::consts::PI * (reach as f64).powi(2))
             .min(scene.terrain.size[0] as f64 * scene.terrain.size[1] as f64);
+        let world_area = scene.terrain.size[0] as f64 * scene.terrain.size[1] as f64;
         let expected = scene.trees.len() as f64
-            + scene.seeded.as_ref().map_or(0.0, |f| f.peak_trees(area));
+            + scene
+                .seeded
+                .as_ref()
+                .map_or(0.0, |f| f.estimated_trees() * area / world_area.max(1.0));
         let budget_pages = settings.cache_mib as u64 * (1 << 20) / (PAGE as u64 * TREE_BYTES);
         let pool_pages = ((expected * 1.25 / PAGE as f64).ceil() as u64)
             .clamp(64, budget_pages.max(64))
@@ -447,13 +451,20 @@ impl World {
         let pages: Vec<u32> = (0..need)
             .map(|_| self.free_pages.pop().expect("enough pages"))
             .collect();
-        for (i, &page) in pages.iter().enumerate() {
-            let chunk = &tile.trees[i * PAGE as usize..((i + 1) * PAGE as usize).min(n as usize)];
+        // One write per run of consecutive pages (usually the whole tile).
+        let mut i = 0;
+        while i < pages.len() {
+            let mut j = i + 1;
+            while j < pages.len() && pages[j] == pages[j - 1] + 1 {
+                j += 1;
+            }
+            let chunk = &tile.trees[i * PAGE as usize..(j * PAGE as usize).min(n as usize)];
             gpu.queue.write_buffer(
                 &self.pool,
-                page as u64 * PAGE as u64 * TREE_BYTES,
+                pages[i] as u64 * PAGE as u64 * TREE_BYTES,
                 bytemuck::cast_slice(chunk),
             );
+            i = j;
         }
         self.resident.insert(
             tile.key,
