@@ -36,6 +36,10 @@ use sylvan_scene::Scene;
 pub const PAGE: u32 = 256;
 /// Passes the lists serve: the camera and each cascade.
 pub const PASSES: usize = 1 + CASCADES;
+/// Tiles of the prefetch ring inserted into the pool per frame, at most (bytes; tiles a pass
+/// sees are always inserted at once).
+const INSERT_BYTES_PER_FRAME: u64 = 1 << 20;
+
 /// Trees fade out over the last 10 % of a finite `[world] tree_distance_m` (their presence,
 /// as the level-of-detail cross-fades), so none pops at the edge.
 pub const TREE_DISTANCE_FADE: f32 = 0.1;
@@ -102,8 +106,12 @@ pub struct WorldStats {
     pub tiles_resident: u32,
     /// Tiles requested and not produced yet.
     pub tiles_pending: u32,
-    /// Tiles produced this frame.
+    /// Tiles produced since the last frame.
     pub tiles_produced: u32,
+    /// Tiles inserted into the pool this frame.
+    pub tiles_inserted: u32,
+    /// Tiles produced and waiting to be inserted.
+    pub tiles_queued: u32,
     /// Tiles the frame had to wait for (visible and missing).
     pub tiles_waited: u32,
     /// Tiles evicted this frame.
@@ -128,6 +136,8 @@ impl WorldStats {
             ("tiles_resident", self.tiles_resident as f64),
             ("tiles_pending", self.tiles_pending as f64),
             ("tiles_produced", self.tiles_produced as f64),
+            ("tiles_inserted", self.tiles_inserted as f64),
+            ("tiles_queued", self.tiles_queued as f64),
             ("tiles_waited", self.tiles_waited as f64),
             ("tiles_evicted", self.tiles_evicted as f64),
             ("trees_resident", self.trees_resident as f64),
@@ -153,6 +163,8 @@ pub struct World {
     tiles: [i32; 2],
     producer: Producer,
     resident: HashMap<TileKey, Resident>,
+    /// Produced, not inserted yet (see [`INSERT_BYTES_PER_FRAME`]).
+    arrived: Vec<TileTrees>,
     pool: wgpu::Buffer,
     free_pages: Vec<u32>,
     pool_pages: u32,
@@ -223,6 +235,7 @@ impl World {
             tiles,
             producer: Producer::new(source, threads),
             resident: HashMap::new(),
+            arrived: Vec::new(),
             free_pages: (0..pool_pages).rev().collect(),
             pool,
             pool_pages,
@@ -289,34 +302,61 @@ impl World {
         // 1. Ask for every tile within range plus the ring, nearest first; forget the rest.
         let wanted = self.tiles_within(eye, range + self.settings.prefetch_m);
         for &(d, key) in &wanted {
-            if !self.resident.contains_key(&key) {
+            if !self.resident.contains_key(&key) && !self.arrived.iter().any(|a| a.key == key) {
                 self.producer.request(key, d);
             }
         }
         let wanted_set: std::collections::HashSet<TileKey> = wanted.iter().map(|w| w.1).collect();
         self.producer.cancel(|k| wanted_set.contains(&k));
         // 2. What arrived; then wait for tiles in range that a drawn pass sees.
-        let mut arrived = self.producer.finished();
+        let fresh = self.producer.finished();
+        stats.tiles_produced = fresh.len() as u32;
+        self.arrived.extend(fresh);
         let needed: Vec<(f32, TileKey)> = wanted.iter().filter(|w| w.0 <= range).copied().collect();
-        let must: Vec<TileKey> = needed
+        let visible: std::collections::HashSet<TileKey> = needed
             .iter()
             .map(|w| w.1)
-            .filter(|&k| !self.resident.contains_key(&k) && !arrived.iter().any(|a| a.key == k))
-            .filter(|&k| self.tile_may_be_seen(k, view))
+            .filter(|&k| !self.resident.contains_key(&k) && self.tile_may_be_seen(k, view))
+            .collect();
+        let must: Vec<TileKey> = visible
+            .iter()
+            .copied()
+            .filter(|&k| !self.arrived.iter().any(|a| a.key == k))
             .collect();
         stats.tiles_waited = must.len() as u32;
         if !must.is_empty() {
-            arrived.extend(self.producer.wait_for(&must));
+            let waited = self.producer.wait_for(&must);
+            stats.tiles_produced += waited.len() as u32;
+            self.arrived.extend(waited);
         }
-        stats.tiles_produced = arrived.len() as u32;
-        arrived.retain(|t| wanted_set.contains(&t.key) && !self.resident.contains_key(&t.key));
-        // 3. Room for them within the budget: evict the farthest tiles not in range first.
-        let incoming: u64 = arrived
-            .iter()
-            .map(|t| (t.trees.len() as u64).div_ceil(PAGE as u64) * PAGE as u64 * TREE_BYTES)
-            .sum();
+        let resident = &self.resident;
+        self.arrived
+            .retain(|t| wanted_set.contains(&t.key) && !resident.contains_key(&t.key));
+        // 3. This frame inserts every arrived tile a pass sees, and others (the ring) nearest
+        // first within a per-frame byte budget, so a burst of arrivals is spread over frames.
+        let t = self.settings.tile_m;
+        self.arrived.sort_by(|a, b| {
+            let key = |x: &TileTrees| (!visible.contains(&x.key), x.key.distance(eye, t));
+            let (ka, kb) = (key(a), key(b));
+            ka.0.cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
+        });
+        let bytes_of =
+            |t: &TileTrees| (t.trees.len() as u64).div_ceil(PAGE as u64) * PAGE as u64 * TREE_BYTES;
+        let mut take = 0;
+        let mut incoming = 0u64;
+        for tile in &self.arrived {
+            let b = bytes_of(tile);
+            if !visible.contains(&tile.key) && incoming + b > INSERT_BYTES_PER_FRAME && take > 0 {
+                break;
+            }
+            incoming += b;
+            take += 1;
+        }
+        // Room for them within the budget: evict the farthest tiles not in range first.
         stats.tiles_evicted = self.evict(eye, range, incoming);
-        for tile in arrived {
+        let batch: Vec<TileTrees> = self.arrived.drain(..take).collect();
+        stats.tiles_inserted = batch.len() as u32;
+        for tile in batch {
             self.insert(gpu, tile)?;
         }
         // 4. Tiles per pass → pages and list capacities (per request: the tiles reaching
@@ -392,6 +432,7 @@ impl World {
             )?;
         }
         stats.tiles_resident = self.resident.len() as u32;
+        stats.tiles_queued = self.arrived.len() as u32;
         stats.tiles_pending = self.producer.pending() as u32;
         stats.trees_resident = self.resident.values().map(|r| r.count as u64).sum();
         stats.gpu_bytes = self.bytes();
