@@ -174,22 +174,33 @@ pub(crate) fn load_gltf(path: &Path) -> Result<Gathered, PlantError> {
     let file = path.display().to_string();
     let mut budget = MAX_IMPORT_BYTES;
     let bytes = read_budget(path, &mut budget).map_err(|e| crate::io_error(&file, e))?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    gltf_from_bytes(&file, &bytes, base, budget)
+}
+
+/// Reads a `.gltf` or `.glb` file's `bytes` (named `file` in errors); external buffers and
+/// textures resolve against `base` and are read within `budget` bytes.
+pub(crate) fn gltf_from_bytes(
+    file: &str,
+    bytes: &[u8],
+    base: &Path,
+    mut budget: u64,
+) -> Result<Gathered, PlantError> {
     let bad = |e: String| {
         PlantError::file(
-            &file,
+            file,
             format!("malformed glTF: {e}"),
             "check the file with a glTF validator or re-export it",
         )
     };
     // gltf-json 1.4 can panic while validating some malformed indices: contain it.
-    let parsed = std::panic::catch_unwind(|| gltf::Gltf::from_slice(&bytes))
+    let parsed = std::panic::catch_unwind(|| gltf::Gltf::from_slice(bytes))
         .map_err(|_| bad("invalid index in the JSON".into()))?;
     let gltf::Gltf { document, blob } = parsed.map_err(|e| bad(e.to_string()))?;
-    let base = path.parent().unwrap_or(Path::new("."));
     let mut blob = blob;
     let buffers = document
         .buffers()
-        .map(|b| read_buffer(&file, &b, base, &mut blob, &mut budget))
+        .map(|b| read_buffer(file, &b, base, &mut blob, &mut budget))
         .collect::<Result<Vec<_>, _>>()?;
     check_accessors(&document, &buffers).map_err(bad)?;
     let mut image_bytes = |img: gltf::Image| -> Option<Vec<u8>> {
@@ -221,7 +232,7 @@ pub(crate) fn load_gltf(path: &Path) -> Result<Gathered, PlantError> {
         instances += 1;
         if instances > MAX_NODE_INSTANCES {
             return Err(PlantError::file(
-                &file,
+                file,
                 format!("the node graph expands to more than {MAX_NODE_INSTANCES} node instances"),
                 "flatten the scene graph or export fewer instances",
             ));
@@ -242,7 +253,7 @@ pub(crate) fn load_gltf(path: &Path) -> Result<Gathered, PlantError> {
             vertices += pos_acc.count();
             if vertices > MAX_IMPORT_VERTICES {
                 return Err(PlantError::file(
-                    &file,
+                    file,
                     format!("more than {MAX_IMPORT_VERTICES} vertices (counting every instance)"),
                     "decimate the mesh",
                 ));
@@ -265,7 +276,7 @@ pub(crate) fn load_gltf(path: &Path) -> Result<Gathered, PlantError> {
                 Some(i) => i.into_u32().collect(),
                 None => (0..pos.len() as u32).collect(),
             };
-            check_indices(&file, &idx, pos.len())?;
+            check_indices(file, &idx, pos.len())?;
             let mat = prim.material();
             let name = format!("{} {}", mat.name().unwrap_or(""), mesh.name().unwrap_or(""));
             let leaf = mat.alpha_mode() != gltf::material::AlphaMode::Opaque || is_leaf_name(&name);
