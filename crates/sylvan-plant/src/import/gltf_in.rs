@@ -105,6 +105,26 @@ fn read_budget(path: &Path, budget: &mut u64) -> Result<Vec<u8>, sylvan_io::Read
     Ok(bytes)
 }
 
+/// Checks that every primitive's POSITION attribute names an existing accessor (before
+/// `gltf`'s validation, which indexes with it unchecked).
+fn check_position_indices(json: &gltf::json::Root) -> Result<(), String> {
+    let positions = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            if let Some(i) = prim.attributes.get(&positions)
+                && i.value() >= json.accessors.len()
+            {
+                return Err(format!(
+                    "mesh {m} primitive {p}: POSITION names accessor {}, the file has {}",
+                    i.value(),
+                    json.accessors.len()
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Checks every accessor against its buffer view and buffer so that reading it cannot go out of
 /// bounds (the `gltf` crate asserts on a stride smaller than the element).
 fn check_accessors(doc: &gltf::Document, buffers: &[Vec<u8>]) -> Result<(), String> {
@@ -193,10 +213,13 @@ pub(crate) fn gltf_from_bytes(
             "check the file with a glTF validator or re-export it",
         )
     };
-    // gltf-json 1.4 can panic while validating some malformed indices: contain it.
-    let parsed = std::panic::catch_unwind(|| gltf::Gltf::from_slice(bytes))
-        .map_err(|_| bad("invalid index in the JSON".into()))?;
-    let gltf::Gltf { document, blob } = parsed.map_err(|e| bad(e.to_string()))?;
+    // gltf-json 1.4's validation indexes `accessors` with each POSITION attribute unchecked (a
+    // panic on a file naming a missing accessor): parse, check those indices, then validate.
+    let gltf::Gltf { document, blob } =
+        gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| bad(e.to_string()))?;
+    let json = document.into_json();
+    check_position_indices(&json).map_err(bad)?;
+    let document = gltf::Document::from_json(json).map_err(|e| bad(e.to_string()))?;
     let mut blob = blob;
     let buffers = document
         .buffers()
