@@ -43,7 +43,9 @@ for t in "${targets[@]}"; do
         SYLVAN_FUZZ_CACHE_SEEDS="fuzz/seeds/cache" \
             nice -n 10 cargo +nightly fuzz run -O "${features[@]}" cache -- -runs=0 >/dev/null
     fi
+    nice -n 10 cargo +nightly fuzz build -O "${features[@]}" "$t" # not part of the timed run
     log="fuzz/logs/$t.log"
+    found_before=$(find "fuzz/artifacts/$t" -type f 2>/dev/null | wc -l)
     start=$(date +%s)
     set +e
     nice -n 10 cargo +nightly fuzz run -O "${features[@]}" "$t" "fuzz/corpus/$t" "fuzz/seeds/$t" -- \
@@ -54,8 +56,9 @@ for t in "${targets[@]}"; do
     secs=$(($(date +%s) - start))
     execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
     rss=$(sed -n 's/^stat::peak_rss_mb: *//p' "$log" | tail -1)
-    crash=$(grep -cE '^==[0-9]+== ERROR|^SUMMARY: libFuzzer|panicked at' "$log" || true)
-    rows+=("| $t | ${execs:-?} | $((secs / 60)) min $((secs % 60)) s | $crash (exit $rc) | ${rss:-?} MB |")
+    # Crashes, OOMs, timeouts and leaks each leave one input under fuzz/artifacts/TARGET/.
+    found=$(($(find "fuzz/artifacts/$t" -type f 2>/dev/null | wc -l) - found_before))
+    rows+=("| $t | ${execs:-?} | $((secs / 60)) min $((secs % 60)) s | $found (exit $rc) | ${rss:-?} MB |")
     echo "${rows[-1]}"
 done
 echo
