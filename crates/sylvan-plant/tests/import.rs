@@ -95,3 +95,19 @@ fn gltf_position_naming_a_missing_accessor_is_an_error() {
         "{e}"
     );
 }
+
+/// Fuzz finding (gltf target): a primitive whose `indices` accessor holds floats reached an
+/// `unreachable!` in the `gltf` reader. Now the accessor types of every semantic read are
+/// checked first: one error line.
+#[test]
+fn gltf_float_indices_are_an_error() {
+    let bad = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../sylvan/tests/data/bad/gltf_float_indices.glb");
+    let e = sylvan_plant::load(&bad).unwrap_err().to_string();
+    assert!(
+        e.contains(
+            "malformed glTF: indices accessor 1 is Vec3 of F32, which glTF does not allow there — "
+        ),
+        "{e}"
+    );
+}

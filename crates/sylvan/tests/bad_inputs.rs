@@ -70,6 +70,11 @@ fn gltf_and_obj_imports() {
         "gltf_position_accessor_missing.gltf",
         &["POSITION names accessor 0, the file has 0"],
     );
+    // Found by `cargo fuzz` (gltf target): the gltf reader hit `unreachable!`.
+    plant(
+        "gltf_float_indices.glb",
+        &["indices accessor 1 is Vec3 of F32, which glTF does not allow there"],
+    );
     plant(
         "obj_mtllib_dev_zero.obj",
         &["mtllib '/dev/zero'", "character device"],

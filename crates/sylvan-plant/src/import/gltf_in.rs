@@ -125,6 +125,40 @@ fn check_position_indices(json: &gltf::json::Root) -> Result<(), String> {
     Ok(())
 }
 
+/// Checks that the accessors a triangle primitive is read through have the types glTF 2.0
+/// requires for their semantic (the `gltf` reader hits `unreachable!` on, e.g., float indices).
+fn check_primitive_types(prim: &gltf::Primitive) -> Result<(), String> {
+    use gltf::Semantic;
+    use gltf::accessor::{DataType as D, Dimensions as N};
+    let check = |what: &str, a: &gltf::Accessor, dims: &[N], types: &[D]| {
+        if dims.contains(&a.dimensions()) && types.contains(&a.data_type()) {
+            Ok(())
+        } else {
+            Err(format!(
+                "{what} accessor {} is {:?} of {:?}, which glTF does not allow there",
+                a.index(),
+                a.dimensions(),
+                a.data_type()
+            ))
+        }
+    };
+    for (semantic, a) in prim.attributes() {
+        match semantic {
+            Semantic::Positions => check("POSITION", &a, &[N::Vec3], &[D::F32])?,
+            Semantic::Normals => check("NORMAL", &a, &[N::Vec3], &[D::F32])?,
+            Semantic::TexCoords(_) => check("TEXCOORD", &a, &[N::Vec2], &[D::F32, D::U8, D::U16])?,
+            Semantic::Colors(_) => {
+                check("COLOR", &a, &[N::Vec3, N::Vec4], &[D::F32, D::U8, D::U16])?
+            }
+            _ => {}
+        }
+    }
+    if let Some(a) = prim.indices() {
+        check("indices", &a, &[N::Scalar], &[D::U8, D::U16, D::U32])?;
+    }
+    Ok(())
+}
+
 /// Checks every accessor against its buffer view and buffer so that reading it cannot go out of
 /// bounds (the `gltf` crate asserts on a stride smaller than the element).
 fn check_accessors(doc: &gltf::Document, buffers: &[Vec<u8>]) -> Result<(), String> {
@@ -269,6 +303,7 @@ pub(crate) fn gltf_from_bytes(
             if prim.mode() != gltf::mesh::Mode::Triangles {
                 continue;
             }
+            check_primitive_types(&prim).map_err(bad)?;
             let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d[..]));
             let Some(pos_acc) = prim.get(&gltf::Semantic::Positions) else {
                 continue;
