@@ -285,3 +285,47 @@ impl Plant {
         self.update_bbox();
     }
 }
+
+/// Entry points for the fuzz targets (`fuzz/`): each reads untrusted bytes the way
+/// [`load`] does and must return an error or a plant, never panic or allocate without bound.
+/// Files an input names (glTF buffers and textures, OBJ's MTL files) resolve against a folder
+/// that does not exist, so the importers' own parsing is what gets fuzzed.
+#[doc(hidden)]
+pub mod fuzzing {
+    use std::cell::Cell;
+    use std::path::Path;
+
+    const NOWHERE: &str = "/nonexistent-sylvan-fuzz";
+
+    /// `.lsys` source, derived and meshed with its limits lowered to keep each input fast
+    /// (the limits themselves are exercised by the tests). Checks the derived word's length.
+    pub fn lsystem(src: &str) {
+        let Ok(mut ls) = crate::LSystem::parse(src, "fuzz.lsys") else {
+            return;
+        };
+        ls.limit = ls.limit.min(20_000);
+        ls.iterations = ls.iterations.min(12);
+        if let Ok(word) = ls.derive() {
+            assert!(word.len() <= ls.limit, "derived word over its limit");
+            let _ = crate::from_lsystem(&ls, "fuzz");
+        }
+    }
+
+    /// A `.gltf` (JSON) or `.glb` file's bytes, imported as a plant.
+    pub fn gltf(bytes: &[u8]) {
+        let file = "fuzz.glb";
+        let budget = crate::import::MAX_IMPORT_BYTES;
+        if let Ok(g) = crate::import::gltf_from_bytes(file, bytes, Path::new(NOWHERE), budget) {
+            let _ = crate::import::finish(file, "fuzz", g, 1.0);
+        }
+    }
+
+    /// An `.obj` file's bytes, imported as a plant.
+    pub fn obj(bytes: &[u8]) {
+        let file = "fuzz.obj";
+        let budget = Cell::new(crate::import::MAX_IMPORT_BYTES);
+        if let Ok(g) = crate::import::obj_from_bytes(file, bytes, Path::new(NOWHERE), budget) {
+            let _ = crate::import::finish(file, "fuzz", g, 1.0);
+        }
+    }
+}

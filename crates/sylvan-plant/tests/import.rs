@@ -79,3 +79,35 @@ fn real_tree_from_another_tool() {
     assert_eq!(q.stats().triangles, s.triangles);
     assert_eq!(q.leaf_count, p.leaf_count);
 }
+
+/// Fuzz finding (gltf target): a primitive whose POSITION names an accessor the file lacks made
+/// gltf-json's validation index out of bounds — a panic message on stderr even though it was
+/// caught. Now checked before validation: one error line.
+#[test]
+fn gltf_position_naming_a_missing_accessor_is_an_error() {
+    let bad = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../sylvan/tests/data/bad/gltf_position_accessor_missing.gltf");
+    let e = sylvan_plant::load(&bad).unwrap_err().to_string();
+    assert!(
+        e.contains(
+            "malformed glTF: mesh 0 primitive 0: POSITION names accessor 0, the file has 0 — "
+        ),
+        "{e}"
+    );
+}
+
+/// Fuzz finding (gltf target): a primitive whose `indices` accessor holds floats reached an
+/// `unreachable!` in the `gltf` reader. Now the accessor types of every semantic read are
+/// checked first: one error line.
+#[test]
+fn gltf_float_indices_are_an_error() {
+    let bad = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../sylvan/tests/data/bad/gltf_float_indices.glb");
+    let e = sylvan_plant::load(&bad).unwrap_err().to_string();
+    assert!(
+        e.contains(
+            "malformed glTF: indices accessor 1 is Vec3 of F32, which glTF does not allow there — "
+        ),
+        "{e}"
+    );
+}

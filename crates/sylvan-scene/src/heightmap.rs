@@ -159,6 +159,44 @@ fn read_png(
     })
 }
 
+/// The first tag of the first TIFF directory that holds no values (count 0), if any. `tiff`
+/// 0.10 indexes the first value of some tags unchecked (an empty SampleFormat panics), so such
+/// files are refused before it sees them. `None` also when the directory cannot be walked: the
+/// decoder then reports why.
+fn empty_tiff_tag(b: &[u8]) -> Option<u16> {
+    let le = match b.get(..2)? {
+        b"II" => true,
+        b"MM" => false,
+        _ => return None,
+    };
+    let at = |o: usize, n: usize| -> Option<u64> {
+        let s = b.get(o..o.checked_add(n)?)?;
+        let mut v = 0u64;
+        for i in 0..n {
+            let byte = if le { s[n - 1 - i] } else { s[i] };
+            v = v << 8 | u64::from(byte);
+        }
+        Some(v)
+    };
+    // Classic TIFF: 2-byte entry count, 12-byte entries with a 4-byte count; BigTIFF: 8 and 20
+    // bytes with an 8-byte count.
+    let (ifd, count_len, entry_len, value_count_len) = match at(2, 2)? {
+        42 => (at(4, 4)?, 2, 12, 4),
+        43 => (at(8, 8)?, 8, 20, 8),
+        _ => return None,
+    };
+    let ifd = usize::try_from(ifd).ok()?;
+    let n = at(ifd, count_len)?;
+    for i in 0..n.min(4096) as usize {
+        let e = ifd + count_len + i * entry_len;
+        let tag = at(e, 2)? as u16;
+        if at(e + 4, value_count_len)? == 0 {
+            return Some(tag);
+        }
+    }
+    None
+}
+
 fn read_tiff(
     bytes: &[u8],
     path: &Path,
@@ -166,6 +204,9 @@ fn read_tiff(
     at: &Location,
 ) -> Result<Raster, SceneError> {
     use tiff::decoder::{Decoder, DecodingResult};
+    if let Some(tag) = empty_tiff_tag(bytes) {
+        return Err(not_image(format!("TIFF tag {tag} has no values")));
+    }
     let mut dec = Decoder::new(Cursor::new(bytes)).map_err(|e| not_image(e.to_string()))?;
     let (w, h) = dec.dimensions().map_err(|e| not_image(e.to_string()))?;
     check_dims(w, h, at, path)?;

@@ -56,19 +56,25 @@ pub mod fuzzing {
             crate::csv::parse_positions(text, Path::new("fuzz.csv"), &at, &t, 0, [5.0, 10.0], 1);
     }
 
-    /// A heightmap file's bytes (PNG or GeoTIFF), made into a 100 m terrain.
+    /// A heightmap file's bytes (PNG or GeoTIFF), made into a 100 m terrain; then the same
+    /// bytes as a density map.
     pub fn heightmap(bytes: &[u8]) {
+        use crate::heightmap::{Purpose, decode_gray};
         let p = Path::new("fuzz.tif");
         let at = Location::file(p);
-        if let Ok(r) =
-            crate::heightmap::decode_gray(bytes, p, crate::heightmap::Purpose::Heightmap, &at)
-        {
+        if let Ok(r) = decode_gray(bytes, p, Purpose::Heightmap, &at) {
             let _ = r.into_terrain([100.0, 100.0], Some([0.0, 50.0]));
         }
+        let _ = decode_gray(bytes, p, Purpose::DensityMap, &at);
     }
 
     /// A scene file's text (files it names resolve against a folder that does not exist).
     pub fn scene(text: &str) {
         let _ = crate::Scene::parse(text, Path::new("/nonexistent/fuzz.toml"));
+    }
+
+    /// A camera-path file's text.
+    pub fn camera_path(text: &str) {
+        let _ = crate::CameraPath::parse(text, Path::new("fuzz-path.toml"));
     }
 }

@@ -55,7 +55,7 @@ struct RawPath {
     #[serde(default)]
     interpolation: Interpolation,
     #[serde(default = "default_fov")]
-    fov_deg: f32,
+    fov_deg: Spanned<f32>,
     #[serde(default)]
     key: Vec<RawKey>,
 }
@@ -64,15 +64,18 @@ struct RawPath {
 #[serde(deny_unknown_fields)]
 struct RawKey {
     t: Spanned<f32>,
-    position: [f32; 3],
-    look_at: [f32; 3],
+    position: Spanned<[f32; 3]>,
+    look_at: Spanned<[f32; 3]>,
     #[serde(skip_serializing_if = "Option::is_none")]
-    fov_deg: Option<f32>,
+    fov_deg: Option<Spanned<f32>>,
 }
 
-fn default_fov() -> f32 {
-    55.0
+fn default_fov() -> Spanned<f32> {
+    Spanned::new(0..0, 55.0)
 }
+
+/// Largest camera coordinate accepted, metres (as in the scene file's `[camera]`).
+const MAX_COORD_M: f32 = 1e7;
 
 impl CameraPath {
     /// Read a camera path file.
@@ -104,38 +107,61 @@ impl CameraPath {
                 "add [[key]] tables with t, position, look_at",
             ));
         }
+        let fov_ok = |f: &Spanned<f32>| -> Result<f32, SceneError> {
+            let v = *f.get_ref();
+            if (1.0..=170.0).contains(&v) {
+                Ok(v)
+            } else {
+                Err(invalid(
+                    f.span().start,
+                    format!("fov_deg = {v} is out of range"),
+                    "give a vertical field of view in [1, 170] degrees",
+                ))
+            }
+        };
+        let default_fov = fov_ok(&raw.fov_deg)?;
         let mut keys = Vec::with_capacity(raw.key.len());
         for k in &raw.key {
             let t = *k.t.get_ref();
-            let after = keys.last().map_or(f32::NEG_INFINITY, |p: &CameraKey| p.t);
-            if !t.is_finite() || t <= after {
+            if !t.is_finite() || t < 0.0 {
                 return Err(invalid(
                     k.t.span().start,
-                    format!("key time t = {t} is not after the previous key"),
-                    "give strictly increasing times in seconds",
+                    format!("key time t = {t} is not a time"),
+                    "give seconds from the start of the path (0 or more)",
                 ));
             }
-            let fov = k.fov_deg.unwrap_or(raw.fov_deg);
-            if !(1.0..=170.0).contains(&fov) {
-                return Err(invalid(
-                    k.t.span().start,
-                    format!("fov_deg = {fov} is out of range"),
-                    "give degrees in [1, 170]",
-                ));
-            }
-            let camera = Camera {
-                position: k.position.into(),
-                look_at: k.look_at.into(),
-                fov_deg: fov,
-            };
-            if !camera.position.is_finite()
-                || !camera.look_at.is_finite()
-                || camera.position == camera.look_at
+            if let Some(prev) = keys.last().map(|p: &CameraKey| p.t)
+                && t <= prev
             {
                 return Err(invalid(
                     k.t.span().start,
-                    "this key's position and look_at must be finite and differ".into(),
-                    "fix the key's coordinates",
+                    format!("key time t = {t} is not after the previous key ({prev})"),
+                    "give strictly increasing times in seconds",
+                ));
+            }
+            let fov = k.fov_deg.as_ref().map_or(Ok(default_fov), fov_ok)?;
+            let coords = |v: &Spanned<[f32; 3]>, name: &str| -> Result<Vec3, SceneError> {
+                let p = Vec3::from(*v.get_ref());
+                if p.is_finite() && p.abs().max_element() <= MAX_COORD_M {
+                    Ok(p)
+                } else {
+                    Err(invalid(
+                        v.span().start,
+                        format!("{name} must be finite and within 10,000 km"),
+                        "give [x, y, z] in metres",
+                    ))
+                }
+            };
+            let camera = Camera {
+                position: coords(&k.position, "position")?,
+                look_at: coords(&k.look_at, "look_at")?,
+                fov_deg: fov,
+            };
+            if camera.position.distance(camera.look_at) < 1e-3 {
+                return Err(invalid(
+                    k.look_at.span().start,
+                    "this key's look_at equals its position".into(),
+                    "look at a point away from the eye",
                 ));
             }
             keys.push(CameraKey { t, camera });
@@ -156,9 +182,9 @@ impl CameraPath {
                 .iter()
                 .map(|k| RawKey {
                     t: Spanned::new(0..0, k.t),
-                    position: k.camera.position.into(),
-                    look_at: k.camera.look_at.into(),
-                    fov_deg: Some(k.camera.fov_deg),
+                    position: Spanned::new(0..0, k.camera.position.into()),
+                    look_at: Spanned::new(0..0, k.camera.look_at.into()),
+                    fov_deg: Some(Spanned::new(0..0, k.camera.fov_deg)),
                 })
                 .collect(),
         };
@@ -295,5 +321,60 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.starts_with("p.toml:3:1: unknown key `pos`"), "{e}");
+    }
+
+    /// Every field of a key is range-checked, the error at the field (issue #19).
+    #[test]
+    fn out_of_range_fields_give_located_errors() {
+        let key = |t: &str, pos: &str, fov: &str| {
+            format!("[[key]]\nt = {t}\nposition = {pos}\nlook_at = [1, 0, 0]\n{fov}")
+        };
+        let err = |text: &str| {
+            CameraPath::parse(text, Path::new("p.toml"))
+                .unwrap_err()
+                .to_string()
+        };
+        for (text, want) in [
+            (
+                key("-1", "[0, 0, 0]", ""),
+                "p.toml:2:5: key time t = -1 is not a time — ",
+            ),
+            (
+                key("nan", "[0, 0, 0]", ""),
+                "p.toml:2:5: key time t = NaN is not a time — ",
+            ),
+            (
+                key("inf", "[0, 0, 0]", ""),
+                "p.toml:2:5: key time t = inf is not a time — ",
+            ),
+            (
+                key("0", "[0, nan, 0]", ""),
+                "p.toml:3:12: position must be finite and within 10,000 km — ",
+            ),
+            (
+                key("0", "[0, 1e30, 0]", ""),
+                "p.toml:3:12: position must be finite and within 10,000 km — ",
+            ),
+            (
+                key("0", "[0, 0, 0]", "fov_deg = 0.5\n"),
+                "p.toml:5:11: fov_deg = 0.5 is out of range — ",
+            ),
+            (
+                key("0", "[0, 0, 0]", "fov_deg = nan\n"),
+                "p.toml:5:11: fov_deg = NaN is out of range — ",
+            ),
+            (
+                format!("fov_deg = 171\n{}", key("0", "[0, 0, 0]", "")),
+                "p.toml:1:11: fov_deg = 171 is out of range — ",
+            ),
+            (
+                key("0", "[1, 0, 0]", ""),
+                "p.toml:4:11: this key's look_at equals its position — ",
+            ),
+        ] {
+            let e = err(&text);
+            assert!(e.starts_with(want), "{text}\n{e}");
+            assert_eq!(e.lines().count(), 1, "{e}");
+        }
     }
 }

@@ -200,3 +200,23 @@ fn example_scene_loads() {
         "{pines} vs {expected}"
     );
 }
+
+/// Fuzz finding (heightmap target): a GeoTIFF whose SampleFormat tag holds no values made the
+/// `tiff` decoder index out of bounds (a panic). Now refused before decoding, one line.
+#[test]
+fn geotiff_with_an_empty_tag_is_refused() {
+    let dir = temp_dir("tif-empty-tag");
+    let bad = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../sylvan/tests/data/bad/dem_sample_format_empty.tif");
+    std::fs::copy(bad, dir.join("dem.tif")).unwrap();
+    let path = dir.join("scene.toml");
+    std::fs::write(
+        &path,
+        "[terrain]\nheightmap = \"dem.tif\"\nsize_m = [20, 10]\n",
+    )
+    .unwrap();
+    let e = Scene::load(&path).unwrap_err().to_string();
+    assert!(e.contains("dem.tif: "), "{e}");
+    assert!(e.contains("(TIFF tag 339 has no values) — "), "{e}");
+    assert_eq!(e.lines().count(), 1, "{e}");
+}

@@ -65,6 +65,16 @@ fn gltf_and_obj_imports() {
         &["buffer", "zero.bin", "character device"],
     );
     plant("gltf_buffer_uri_bad_percent.gltf", &["no such file"]);
+    // Found by `cargo fuzz` (gltf target): gltf-json's validation panicked.
+    plant(
+        "gltf_position_accessor_missing.gltf",
+        &["POSITION names accessor 0, the file has 0"],
+    );
+    // Found by `cargo fuzz` (gltf target): the gltf reader hit `unreachable!`.
+    plant(
+        "gltf_float_indices.glb",
+        &["indices accessor 1 is Vec3 of F32, which glTF does not allow there"],
+    );
     plant(
         "obj_mtllib_dev_zero.obj",
         &["mtllib '/dev/zero'", "character device"],
@@ -107,6 +117,14 @@ fn scene_values_and_files() {
     render(
         "scene_geotiff_3e38.toml",
         &["dem_samples_3e38.tif: sample at column 1, row 0 is 3e38 m"],
+    );
+    // Found by `cargo fuzz` (heightmap target): the tiff decoder panicked.
+    render(
+        "scene_geotiff_sample_format_empty.toml",
+        &[
+            "dem_sample_format_empty.tif: ",
+            "TIFF tag 339 has no values",
+        ],
     );
     render(
         "scene_preset_oak.toml",

@@ -255,6 +255,27 @@ fn bad_scene_files_give_file_line_col() {
     }
 }
 
+/// `--out` naming a folder, or a file in a missing folder: one line that says so, before any
+/// rendering (issue #19: it used to end in "check the folder exists").
+#[test]
+fn out_that_is_a_folder_or_in_a_missing_folder_is_refused() {
+    let dir = workdir("out_folder");
+    tiny_scene(&dir);
+    std::fs::create_dir_all(dir.join("shots")).unwrap();
+    let out = sylvan(&["render", "tiny.toml", "--out", "shots"], &dir);
+    assert_one_line_error(
+        &out,
+        &[
+            "--out shots: is a folder, not a file — give a file name",
+            "shots/sylvan.png",
+        ],
+    );
+    let out = sylvan(&["render", "tiny.toml", "--out", "nope/a.png"], &dir);
+    assert_one_line_error(&out, &["--out nope/a.png: folder nope does not exist — "]);
+    let out = sylvan(&["render", "tiny.toml", "--stats", "shots"], &dir);
+    assert_one_line_error(&out, &["--stats shots: is a folder, not a file — "]);
+}
+
 #[test]
 fn no_adapter_names_the_packages_to_install() {
     // No Metal adapter exists on Linux: the same path as a machine without any GPU driver.

@@ -105,6 +105,60 @@ fn read_budget(path: &Path, budget: &mut u64) -> Result<Vec<u8>, sylvan_io::Read
     Ok(bytes)
 }
 
+/// Checks that every primitive's POSITION attribute names an existing accessor (before
+/// `gltf`'s validation, which indexes with it unchecked).
+fn check_position_indices(json: &gltf::json::Root) -> Result<(), String> {
+    let positions = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            if let Some(i) = prim.attributes.get(&positions)
+                && i.value() >= json.accessors.len()
+            {
+                return Err(format!(
+                    "mesh {m} primitive {p}: POSITION names accessor {}, the file has {}",
+                    i.value(),
+                    json.accessors.len()
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Checks that the accessors a triangle primitive is read through have the types glTF 2.0
+/// requires for their semantic (the `gltf` reader hits `unreachable!` on, e.g., float indices).
+fn check_primitive_types(prim: &gltf::Primitive) -> Result<(), String> {
+    use gltf::Semantic;
+    use gltf::accessor::{DataType as D, Dimensions as N};
+    let check = |what: &str, a: &gltf::Accessor, dims: &[N], types: &[D]| {
+        if dims.contains(&a.dimensions()) && types.contains(&a.data_type()) {
+            Ok(())
+        } else {
+            Err(format!(
+                "{what} accessor {} is {:?} of {:?}, which glTF does not allow there",
+                a.index(),
+                a.dimensions(),
+                a.data_type()
+            ))
+        }
+    };
+    for (semantic, a) in prim.attributes() {
+        match semantic {
+            Semantic::Positions => check("POSITION", &a, &[N::Vec3], &[D::F32])?,
+            Semantic::Normals => check("NORMAL", &a, &[N::Vec3], &[D::F32])?,
+            Semantic::TexCoords(_) => check("TEXCOORD", &a, &[N::Vec2], &[D::F32, D::U8, D::U16])?,
+            Semantic::Colors(_) => {
+                check("COLOR", &a, &[N::Vec3, N::Vec4], &[D::F32, D::U8, D::U16])?
+            }
+            _ => {}
+        }
+    }
+    if let Some(a) = prim.indices() {
+        check("indices", &a, &[N::Scalar], &[D::U8, D::U16, D::U32])?;
+    }
+    Ok(())
+}
+
 /// Checks every accessor against its buffer view and buffer so that reading it cannot go out of
 /// bounds (the `gltf` crate asserts on a stride smaller than the element).
 fn check_accessors(doc: &gltf::Document, buffers: &[Vec<u8>]) -> Result<(), String> {
@@ -174,22 +228,36 @@ pub(crate) fn load_gltf(path: &Path) -> Result<Gathered, PlantError> {
     let file = path.display().to_string();
     let mut budget = MAX_IMPORT_BYTES;
     let bytes = read_budget(path, &mut budget).map_err(|e| crate::io_error(&file, e))?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    gltf_from_bytes(&file, &bytes, base, budget)
+}
+
+/// Reads a `.gltf` or `.glb` file's `bytes` (named `file` in errors); external buffers and
+/// textures resolve against `base` and are read within `budget` bytes.
+pub(crate) fn gltf_from_bytes(
+    file: &str,
+    bytes: &[u8],
+    base: &Path,
+    mut budget: u64,
+) -> Result<Gathered, PlantError> {
     let bad = |e: String| {
         PlantError::file(
-            &file,
+            file,
             format!("malformed glTF: {e}"),
             "check the file with a glTF validator or re-export it",
         )
     };
-    // gltf-json 1.4 can panic while validating some malformed indices: contain it.
-    let parsed = std::panic::catch_unwind(|| gltf::Gltf::from_slice(&bytes))
-        .map_err(|_| bad("invalid index in the JSON".into()))?;
-    let gltf::Gltf { document, blob } = parsed.map_err(|e| bad(e.to_string()))?;
-    let base = path.parent().unwrap_or(Path::new("."));
+    // gltf-json 1.4's validation indexes `accessors` with each POSITION attribute unchecked (a
+    // panic on a file naming a missing accessor): parse, check those indices, then validate.
+    let gltf::Gltf { document, blob } =
+        gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| bad(e.to_string()))?;
+    let json = document.into_json();
+    check_position_indices(&json).map_err(bad)?;
+    let document = gltf::Document::from_json(json).map_err(|e| bad(e.to_string()))?;
     let mut blob = blob;
     let buffers = document
         .buffers()
-        .map(|b| read_buffer(&file, &b, base, &mut blob, &mut budget))
+        .map(|b| read_buffer(file, &b, base, &mut blob, &mut budget))
         .collect::<Result<Vec<_>, _>>()?;
     check_accessors(&document, &buffers).map_err(bad)?;
     let mut image_bytes = |img: gltf::Image| -> Option<Vec<u8>> {
@@ -221,7 +289,7 @@ pub(crate) fn load_gltf(path: &Path) -> Result<Gathered, PlantError> {
         instances += 1;
         if instances > MAX_NODE_INSTANCES {
             return Err(PlantError::file(
-                &file,
+                file,
                 format!("the node graph expands to more than {MAX_NODE_INSTANCES} node instances"),
                 "flatten the scene graph or export fewer instances",
             ));
@@ -235,6 +303,7 @@ pub(crate) fn load_gltf(path: &Path) -> Result<Gathered, PlantError> {
             if prim.mode() != gltf::mesh::Mode::Triangles {
                 continue;
             }
+            check_primitive_types(&prim).map_err(bad)?;
             let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d[..]));
             let Some(pos_acc) = prim.get(&gltf::Semantic::Positions) else {
                 continue;
@@ -242,7 +311,7 @@ pub(crate) fn load_gltf(path: &Path) -> Result<Gathered, PlantError> {
             vertices += pos_acc.count();
             if vertices > MAX_IMPORT_VERTICES {
                 return Err(PlantError::file(
-                    &file,
+                    file,
                     format!("more than {MAX_IMPORT_VERTICES} vertices (counting every instance)"),
                     "decimate the mesh",
                 ));
@@ -265,7 +334,7 @@ pub(crate) fn load_gltf(path: &Path) -> Result<Gathered, PlantError> {
                 Some(i) => i.into_u32().collect(),
                 None => (0..pos.len() as u32).collect(),
             };
-            check_indices(&file, &idx, pos.len())?;
+            check_indices(file, &idx, pos.len())?;
             let mat = prim.material();
             let name = format!("{} {}", mat.name().unwrap_or(""), mesh.name().unwrap_or(""));
             let leaf = mat.alpha_mode() != gltf::material::AlphaMode::Opaque || is_leaf_name(&name);

@@ -31,8 +31,8 @@ pub const MAX_IMPORT_VERTICES: usize = 4_000_000;
 /// Largest texture decoded (width × height), checked from the image header before decoding.
 pub const MAX_TEXTURE_PIXELS: u64 = 4096 * 4096;
 
-pub(crate) use gltf_in::load_gltf;
-pub(crate) use obj_in::load_obj;
+pub(crate) use gltf_in::{gltf_from_bytes, load_gltf};
+pub(crate) use obj_in::{load_obj, obj_from_bytes};
 
 /// True when a material or object name says leaves.
 pub fn is_leaf_name(name: &str) -> bool {

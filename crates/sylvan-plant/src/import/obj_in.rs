@@ -27,15 +27,26 @@ fn find_texture(dir: &Path, name: &str, budget: &Cell<u64>) -> Option<Tex> {
 /// Reads an `.obj` (and its `.mtl`) into wood and leaves (file units, not yet centred).
 pub(crate) fn load_obj(path: &Path) -> Result<Gathered, PlantError> {
     let file = path.display().to_string();
+    let budget = Cell::new(MAX_IMPORT_BYTES);
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let obj = read_budget(path, &budget).map_err(|e| crate::io_error(&file, e))?;
+    obj_from_bytes(&file, &obj, dir, budget)
+}
+
+/// Reads an `.obj` file's bytes (named `file` in errors); MTL files and textures resolve
+/// against `dir` and are read within `budget` bytes.
+pub(crate) fn obj_from_bytes(
+    file: &str,
+    obj: &[u8],
+    dir: &Path,
+    budget: Cell<u64>,
+) -> Result<Gathered, PlantError> {
     let opts = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
         ignore_points: true,
         ignore_lines: true,
     };
-    let budget = Cell::new(MAX_IMPORT_BYTES);
-    let dir = path.parent().unwrap_or(Path::new("."));
-    let obj = read_budget(path, &budget).map_err(|e| crate::io_error(&file, e))?;
     // MTL files go through the same bounded reader. A missing one is tolerated (default
     // materials, as before); one that is a device or a FIFO, or too large, stops the import.
     let mtl_error = std::cell::RefCell::new(None);
@@ -48,7 +59,7 @@ pub(crate) fn load_obj(path: &Path) -> Result<Gathered, PlantError> {
             }
             Err(e) => {
                 mtl_error.borrow_mut().get_or_insert_with(|| {
-                    PlantError::file(&file, format!("mtllib '{}': {e}", p.display()), e.fix())
+                    PlantError::file(file, format!("mtllib '{}': {e}", p.display()), e.fix())
                 });
                 Err(tobj::LoadError::OpenFileFailed)
             }
@@ -56,7 +67,7 @@ pub(crate) fn load_obj(path: &Path) -> Result<Gathered, PlantError> {
     };
     let (models, mats) = tobj::load_obj_buf(&mut &obj[..], &opts, load_mtl).map_err(|e| {
         PlantError::file(
-            &file,
+            file,
             format!("malformed OBJ: {e}"),
             "check the file or re-export it as OBJ",
         )
@@ -81,7 +92,7 @@ pub(crate) fn load_obj(path: &Path) -> Result<Gathered, PlantError> {
             || mesh.normals.len() % 3 != 0
         {
             return Err(PlantError::file(
-                &file,
+                file,
                 "malformed OBJ: attribute arrays have odd lengths",
                 "re-export the mesh",
             ));
@@ -102,7 +113,7 @@ pub(crate) fn load_obj(path: &Path) -> Result<Gathered, PlantError> {
             .chunks_exact(2)
             .map(|p| [p[0], 1.0 - p[1]])
             .collect();
-        check_indices(&file, &mesh.indices, pos.len())?;
+        check_indices(file, &mesh.indices, pos.len())?;
         let mat = mesh.material_id.and_then(|i| mats.get(i));
         let mname = mat.map_or("", |m| m.name.as_str());
         let leaf = is_leaf_name(mname)

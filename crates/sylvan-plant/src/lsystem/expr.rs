@@ -177,7 +177,12 @@ impl Expr {
                 if !r.is_finite() {
                     return Err(EvalError {
                         pos: *pos,
-                        what: format!("{x} {} {y} is not a finite number", op_str(*op)),
+                        what: format!(
+                            "{} {} {} is not a finite number",
+                            compact(x),
+                            op_str(*op),
+                            compact(y)
+                        ),
                     });
                 }
                 r
@@ -210,7 +215,19 @@ impl Expr {
                 if !r.is_finite() {
                     return Err(EvalError {
                         pos: *pos,
-                        what: format!("{f:?}({a}) is not a finite number").to_lowercase(),
+                        what: match f {
+                            Func::Min | Func::Max | Func::Pow => format!(
+                                "{}({}, {}) is not a finite number",
+                                format!("{f:?}").to_lowercase(),
+                                compact(a),
+                                compact(b)
+                            ),
+                            _ => format!(
+                                "{}({}) is not a finite number",
+                                format!("{f:?}").to_lowercase(),
+                                compact(a)
+                            ),
+                        },
                     });
                 }
                 r
@@ -496,5 +513,50 @@ fn parse_atom(c: &mut Cursor, s: &Scope, depth: u32) -> Result<(Expr, u32), Pars
             "expression ends too early",
             "complete the expression",
         )),
+    }
+}
+
+/// A number for an error message: plain when short, else in exponent form with at most seven
+/// significant digits (`1e260`, not 261 digits; `1.5e-9`, not `0.0000000015`).
+pub(crate) fn compact(v: f64) -> String {
+    let a = v.abs();
+    if a != 0.0 && a.is_finite() && !(1e-6..1e9).contains(&a) {
+        let s = format!("{v:.6e}");
+        let (mantissa, exp) = s.split_once('e').unwrap_or((&s, "0"));
+        let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+        format!("{mantissa}e{exp}")
+    } else {
+        format!("{v}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::compact;
+
+    #[test]
+    fn numbers_in_messages_are_compact() {
+        assert_eq!(compact(1e260), "1e260");
+        assert_eq!(compact(-2.5e300), "-2.5e300");
+        assert_eq!(compact(1.5e-9), "1.5e-9");
+        assert_eq!(compact(12.25), "12.25");
+        assert_eq!(compact(0.0), "0");
+        assert_eq!(compact(f64::INFINITY), "inf");
+        assert_eq!(compact(9.999_999_999_999_999e259), "1e260");
+        assert_eq!(compact(1.234_567_89e10), "1.234568e10");
+    }
+
+    /// Issue #19: an overflowing parameter printed all 261 digits of 1e260.
+    #[test]
+    fn overflow_error_is_one_short_line() {
+        let src = "iterations: 3\nangle: 20\naxiom: A(1e200)\nA(x) -> F(1) A(x * 1e60)\n";
+        let ls = crate::LSystem::parse(src, "big.lsys").unwrap();
+        let e = ls.derive().unwrap_err().to_string();
+        assert!(e.starts_with("big.lsys:4:"), "{e}");
+        assert!(
+            e.contains(": 1e260 * 1e60 is not a finite number — "),
+            "{e}"
+        );
+        assert!(e.len() < 200, "{e}");
     }
 }

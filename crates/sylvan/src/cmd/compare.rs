@@ -40,7 +40,10 @@ fn parse_crop(s: &str, width: u32, height: u32) -> anyhow::Result<[u32; 4]> {
         .collect::<Result<_, _>>()?;
     let [x, y, w, h] = <[u32; 4]>::try_from(v).map_err(|_| bad())?;
     if x >= width || y >= height || w == 0 || h == 0 {
-        anyhow::bail!("--crop {s}: the rectangle is outside the {width}x{height} image or empty");
+        anyhow::bail!(
+            "--crop {s}: the rectangle is outside the {width}x{height} image or empty — give a \
+             corner inside the image and a non-zero size, e.g. --crop 0,0,{width},{height}"
+        );
     }
     Ok([x, y, w.min(width - x), h.min(height - y)])
 }
@@ -95,4 +98,23 @@ fn human_line(m: &Metrics, p95: f32, max: f32) -> String {
         "FLIP {:.4} (p95 {p95:.4}, max {max:.4})  SSIM {:.4}  PSNR {psnr}",
         m.flip_mean, m.ssim
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_crop;
+
+    #[test]
+    fn crops_are_clipped_and_bad_ones_say_how_to_fix_them() {
+        assert_eq!(parse_crop("10,20,500,5", 100, 50).unwrap(), [10, 20, 90, 5]);
+        let e = parse_crop("100,0,5,5", 100, 50).unwrap_err().to_string();
+        assert!(
+            e.starts_with(
+                "--crop 100,0,5,5: the rectangle is outside the 100x50 image or empty — "
+            ) && e.ends_with("e.g. --crop 0,0,100,50"),
+            "{e}"
+        );
+        let e = parse_crop("1,2,3", 100, 50).unwrap_err().to_string();
+        assert!(e.contains(" — ") || e.contains("e.g. --crop"), "{e}");
+    }
 }

@@ -48,8 +48,34 @@ fn save(image: image::RgbaImage, out: &Path) -> Result<()> {
         })
 }
 
+/// Refuses an output path that cannot be written as a file, before any rendering: an existing
+/// folder (`--out shots/`), or a path whose folder does not exist.
+fn check_out(flag: &str, out: &Path) -> Result<()> {
+    if out.is_dir() {
+        bail!(
+            "{flag} {}: is a folder, not a file — give a file name, e.g. {}",
+            out.display(),
+            out.join("sylvan.png").display()
+        );
+    }
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty())
+        && !dir.is_dir()
+    {
+        bail!(
+            "{flag} {}: folder {} does not exist — create it or write somewhere else",
+            out.display(),
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
 /// Runs `sylvan render`.
 pub fn run(args: RenderArgs) -> Result<()> {
+    check_out("--out", &args.out)?;
+    if let Some(stats) = &args.stats {
+        check_out("--stats", stats)?;
+    }
     if args.frames == 0 || args.frames > MAX_FRAMES {
         bail!(
             "--frames {}: must be between 1 and {MAX_FRAMES}",

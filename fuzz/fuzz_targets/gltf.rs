@@ -1,0 +1,9 @@
+//! Fuzz target: glTF import (`.gltf` JSON and `.glb` binary) must give a plant or a one-line
+//! error, never panic or allocate without bound. Run: `scripts/fuzz.sh gltf`.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| {
+    sylvan_plant::fuzzing::gltf(data);
+});
