@@ -13,7 +13,12 @@
 //! | `geometry` | [`geometry`] | reference: full meshes, the ground truth |
 //! | `boxtree` | [`boxtree`] | LCV04 |
 //! | `hbt` | [`hbt`] | MNP01 |
+//! | `octahedral` | [`octahedral`] | industry baseline: hemi-octahedral impostor |
 //! | `auto` | [`lod`] | the LOD chain: a technique per distance band, cross-faded |
+//!
+//! GPU-driven techniques (`Entry::gpu_driven`: `geometry`, `octahedral`, a chain of those)
+//! draw the tiled world from [`DrawContext::culled`] ([`crate::world`]); the others get every
+//! tree on the CPU in [`FrameInput::instances`].
 //!
 //! Adding a technique: docs/DESIGN.md, "Adding a technique".
 
