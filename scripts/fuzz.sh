@@ -36,7 +36,7 @@ rows=()
 for t in "${targets[@]}"; do
     features=()
     [ "$t" = cache ] && features=(--features render)
-    mkdir -p "fuzz/corpus/$t" "fuzz/seeds/$t"
+    mkdir -p "fuzz/corpus/$t" "fuzz/seeds/$t" "fuzz/artifacts/$t"
     if [ "$t" = cache ]; then
         nice -n 10 cargo +nightly fuzz build -O "${features[@]}" cache
         # The target writes its own seeds (tiny valid entries of each technique) and exits.
