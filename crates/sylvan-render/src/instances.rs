@@ -35,6 +35,22 @@ pub fn tint_seed(seed: u32) -> f32 {
     (seed.wrapping_mul(2_654_435_761) >> 8) as f32 / (1u32 << 24) as f32
 }
 
+/// Tree `t`'s world bounding sphere (centre, radius) for a species with model bounds `b`, the
+/// plant scaled from its height to the tree's (the GPU cull computes the same in `cull.wgsl`).
+pub(crate) fn tree_sphere(t: &TreeInstance, b: &SpeciesBounds) -> (Vec3, f32) {
+    let scale = t.height / b.max.y.max(1e-3);
+    let local_centre = (b.min + b.max) * 0.5 * scale;
+    let radius = (b.max - b.min).length() * 0.5 * scale;
+    let (s, c) = t.rotation.sin_cos();
+    let centre = t.position
+        + Vec3::new(
+            c * local_centre.x + s * local_centre.z,
+            local_centre.y,
+            -s * local_centre.x + c * local_centre.z,
+        );
+    (centre, radius)
+}
+
 /// A tree prepared for culling: GPU record plus world bounding sphere.
 #[derive(Clone, Copy, Debug)]
 struct Placed {
@@ -76,15 +92,8 @@ impl Instances {
             .map(|t| {
                 let b = bounds[t.species as usize];
                 let scale = t.height / b.max.y.max(1e-3);
-                let local_centre = (b.min + b.max) * 0.5 * scale;
-                let radius = (b.max - b.min).length() * 0.5 * scale;
                 let (s, c) = t.rotation.sin_cos();
-                let centre = t.position
-                    + Vec3::new(
-                        c * local_centre.x + s * local_centre.z,
-                        local_centre.y,
-                        -s * local_centre.x + c * local_centre.z,
-                    );
+                let (centre, radius) = tree_sphere(t, &b);
                 let seed = tint_seed(t.seed);
                 Placed {
                     gpu: GpuTreeInstance {

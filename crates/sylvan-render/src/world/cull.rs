@@ -148,6 +148,8 @@ pub(crate) struct FrameCull<'a> {
     pub window: [f32; 4],
     pub frustums: &'a [Option<Frustum>; PASSES],
     pub pages: &'a [GpuPage],
+    /// Changes whenever the pool buffer is replaced (grown).
+    pub pool_generation: u64,
     /// Per (pass, group) list: the most trees it can receive.
     pub capacity: &'a [u32],
     pub draws: &'a [IndirectDraw],
@@ -215,6 +217,8 @@ pub(crate) struct Cull {
     listed: Vec<u32>,
     draws_per_pass: usize,
     max_binding: u64,
+    /// The bind group of the buffers above, with the pool generation it binds.
+    bind: Option<(wgpu::BindGroup, u64)>,
 }
 
 /// A storage buffer that grows (never shrinks).
@@ -234,11 +238,13 @@ impl Storage {
         }
     }
 
-    /// Makes room for `bytes` (contents are not kept).
-    fn reserve(&mut self, gpu: &Gpu, bytes: u64) {
+    /// Makes room for `bytes` (contents are not kept); whether the buffer was replaced.
+    fn reserve(&mut self, gpu: &Gpu, bytes: u64) -> bool {
         if bytes > self.buffer.size() {
             self.buffer = make(gpu, self.label, self.usage, bytes.next_power_of_two());
+            return true;
         }
+        false
     }
 }
 
@@ -366,6 +372,7 @@ impl Cull {
             listed: vec![0; n_lists],
             draws_per_pass: 0,
             max_binding,
+            bind: None,
         })
     }
 
@@ -444,15 +451,19 @@ impl Cull {
                 })
             })
             .collect();
-        self.trees.reserve(gpu, at as u64 * TREE_BYTES);
-        self.pages
+        // The bind group is made again only when a buffer it binds was replaced.
+        let mut stale = self.bind.as_ref().is_none_or(|b| b.1 != f.pool_generation);
+        stale |= self.trees.reserve(gpu, at as u64 * TREE_BYTES);
+        stale |= self
+            .pages
             .reserve(gpu, std::mem::size_of_val(f.pages) as u64);
-        self.draws
+        stale |= self
+            .draws
             .reserve(gpu, std::mem::size_of_val(draws.as_slice()) as u64);
-        self.args.reserve(gpu, draws.len() as u64 * 20);
+        stale |= self.args.reserve(gpu, draws.len() as u64 * 20);
         let sorted = self.layout_of_lists.sort_camera && !self.layout_of_lists.per_species;
         let sorted_capacity = if sorted { self.capacity[0] } else { 0 };
-        self.parked.reserve(gpu, sorted_capacity as u64 * 16);
+        stale |= self.parked.reserve(gpu, sorted_capacity as u64 * 16);
         let mut params = GpuParams {
             planes: [[0.0; 4]; 6 * PASSES],
             eye_far: [f.eye.x, f.eye.y, f.eye.z, f.far],
@@ -488,29 +499,33 @@ impl Cull {
         if !draws.is_empty() {
             q.write_buffer(&self.draws.buffer, 0, bytemuck::cast_slice(&draws));
         }
-        let bind = crate::technique::common::bind_group(
-            gpu,
-            "cull_bind",
-            &self.layout,
-            &[
-                self.params.as_entire_binding(),
-                pool.as_entire_binding(),
-                self.pages.buffer.as_entire_binding(),
-                self.lists.buffer.as_entire_binding(),
-                self.counters.buffer.as_entire_binding(),
-                self.trees.buffer.as_entire_binding(),
-                self.draws.buffer.as_entire_binding(),
-                self.args.buffer.as_entire_binding(),
-                self.parked.buffer.as_entire_binding(),
-            ],
-        );
+        if stale {
+            let bind = crate::technique::common::bind_group(
+                gpu,
+                "cull_bind",
+                &self.layout,
+                &[
+                    self.params.as_entire_binding(),
+                    pool.as_entire_binding(),
+                    self.pages.buffer.as_entire_binding(),
+                    self.lists.buffer.as_entire_binding(),
+                    self.counters.buffer.as_entire_binding(),
+                    self.trees.buffer.as_entire_binding(),
+                    self.draws.buffer.as_entire_binding(),
+                    self.args.buffer.as_entire_binding(),
+                    self.parked.buffer.as_entire_binding(),
+                ],
+            );
+            self.bind = Some((bind, f.pool_generation));
+        }
+        let bind = &self.bind.as_ref().expect("made above").0;
         encoder.clear_buffer(&self.counters.buffer, 0, None);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("cull"),
                 timestamp_writes: None,
             });
-            pass.set_bind_group(0, &bind, &[]);
+            pass.set_bind_group(0, bind, &[]);
             if !f.pages.is_empty() {
                 pass.set_pipeline(&self.cull);
                 // One workgroup row per page: the pool's binding limit keeps pages far below

@@ -426,6 +426,7 @@ impl World {
                     window: request.window,
                     frustums: view.frustums,
                     pages: &pages,
+                    pool_generation: self.pool_pages as u64,
                     capacity: &capacity,
                     draws: &request.draws,
                 },

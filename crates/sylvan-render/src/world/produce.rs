@@ -3,7 +3,7 @@
 //! first; the render thread can run jobs itself while it waits for a tile it must have.
 
 use super::{PoolTree, TileKey};
-use crate::instances::{SpeciesBounds, tint_seed};
+use crate::instances::{SpeciesBounds, tint_seed, tree_sphere};
 use glam::{Vec2, Vec3};
 use std::collections::{HashMap, HashSet};
 use std::sync::mpsc::{Receiver, Sender, channel};
@@ -76,7 +76,7 @@ impl Source {
                 continue;
             };
             let rec = PoolTree::new(t, b);
-            let (c, r) = sphere(t, b);
+            let (c, r) = tree_sphere(t, b);
             out.min = out.min.min(c - r);
             out.max = out.max.max(c + r);
             out.species_counts[t.species as usize] += 1;
@@ -84,22 +84,6 @@ impl Source {
         }
         out
     }
-}
-
-/// A tree's world bounding sphere (centre, radius), as [`crate::instances::Instances`] and the
-/// cull shader compute it.
-fn sphere(t: &TreeInstance, b: &SpeciesBounds) -> (Vec3, f32) {
-    let scale = t.height / b.max.y.max(1e-3);
-    let local_centre = (b.min + b.max) * 0.5 * scale;
-    let radius = (b.max - b.min).length() * 0.5 * scale;
-    let (s, c) = t.rotation.sin_cos();
-    let centre = t.position
-        + Vec3::new(
-            c * local_centre.x + s * local_centre.z,
-            local_centre.y,
-            -s * local_centre.x + c * local_centre.z,
-        );
-    (centre, radius)
 }
 
 impl PoolTree {
