@@ -99,6 +99,14 @@ impl Bake for BillboardCloudBake {
         fields.insert("leaves".into(), serde_json::json!(a.leaves));
         fields.insert("list_entries".into(), serde_json::json!(entries));
         fields.insert("bytes".into(), serde_json::json!(a.bytes()));
+        // Rectangle area of each cloud's planes (plant units²): what a plain billboard cloud
+        // of the same planes would have to texture.
+        let areas: Vec<f32> = a
+            .clouds
+            .iter()
+            .map(|c| c.planes.iter().map(|p| p.size().x * p.size().y).sum())
+            .collect();
+        fields.insert("plane_area".into(), serde_json::json!(areas));
         AssetSummary {
             line: format!(
                 "{} leaves in clouds of {:?} planes, {} list entries, {:.2} MB",

@@ -83,8 +83,9 @@ pub struct BillboardCloud {
     static_bytes: u64,
     /// CPU-driven: each cloud's trees this frame.
     lists: Vec<Instances>,
-    /// Per cloud: trees drawn in the camera pass last frame.
-    drawn: [u32; LEVELS],
+    /// Per cloud: trees drawn in the camera pass last frame (CPU-driven frames; the GPU cull
+    /// counts its own, `trees_drawn` per technique).
+    drawn: Option<[u32; LEVELS]>,
     /// Per cloud: its presence window by distance (this frame's).
     windows: [[f32; 4]; LEVELS],
 }
@@ -459,7 +460,7 @@ impl BillboardCloud {
             band,
             static_bytes,
             lists,
-            drawn: [0; LEVELS],
+            drawn: None,
             windows: [ListRequest::ALL; LEVELS],
         };
         // Until the first frame: a 1080p camera with a 60° field of view.
@@ -619,6 +620,12 @@ impl Technique for BillboardCloud {
         }
         gpu.queue
             .write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(&self.params));
+        if input.instances.total() == 0 {
+            // GPU-driven: the cull makes the lists.
+            self.drawn = None;
+            return Ok(());
+        }
+        let mut drawn = [0; LEVELS];
         for (l, list) in self.lists.iter_mut().enumerate() {
             let w = self.windows[l];
             let eye = input.eye;
@@ -626,8 +633,9 @@ impl Technique for BillboardCloud {
                 let d = Vec3::from_slice(&r.base_scale[..3]).distance(eye);
                 smoothstep(w[0], w[1], d) * (1.0 - smoothstep(w[2], w[3], d))
             });
-            self.drawn[l] = list.drawn();
+            drawn[l] = list.drawn();
         }
+        self.drawn = Some(drawn);
         Ok(())
     }
 
@@ -651,13 +659,18 @@ impl Technique for BillboardCloud {
     }
 
     fn stats(&self) -> Vec<(&'static str, f64)> {
-        vec![
-            ("near_trees", self.drawn[0] as f64),
-            ("mid_trees", self.drawn[1] as f64),
-            ("far_trees", self.drawn[2] as f64),
+        let mut s = vec![
             ("mid_from_m", self.windows[1][0] as f64),
             ("far_from_m", self.windows[2][0] as f64),
-        ]
+        ];
+        if let Some(d) = self.drawn {
+            s.extend([
+                ("near_trees", d[0] as f64),
+                ("mid_trees", d[1] as f64),
+                ("far_trees", d[2] as f64),
+            ]);
+        }
+        s
     }
 
     /// One request per cloud: each species' wood and planes, by the cloud's window.
