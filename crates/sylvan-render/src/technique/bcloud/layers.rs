@@ -18,10 +18,10 @@
 //! - **Fragments from the leaves' triangles.** GPSS07 splats each leaf as a point sprite of its
 //!   bounding square and depth-peels the sprites; a cell here lists the leaves whose projected
 //!   triangles overlap it (exact 2D separating-axis test), so no cell lists a leaf that cannot
-//!   cover it and none misses one that does. A leaf lies on its plane turned parallel to it
-//!   about its centre ([`Plane::leaf_st`]: true size, any angle), so the order is the height of
-//!   its centre above the plane, descending (ties by leaf number): front to back from the
-//!   plane's front side, back to front read from its other end.
+//!   cover it and none misses one that does. A leaf is turned towards its plane about its
+//!   centre before it is projected ([`Plane::leaf_st`]), and the order is the height of its
+//!   centre above the plane, descending (ties by leaf number): front to back from the plane's
+//!   front side, back to front read from its other end.
 //! - **Ambient occlusion per vertex is the reference's** (`crown_occlusion` of
 //!   `shaders/frame.wgsl`, the term `geometry` shades every leaf vertex with), extrapolated to
 //!   the leaf's box corners by least squares (fig. 11), so the technique matches the ground
@@ -481,7 +481,7 @@ pub fn build(
         for &l in &plane.leaves {
             let leaf = &leaves[l as usize];
             records[l as usize] = record(plant, leaf, plane);
-            // The leaf lies on its billboard turned parallel to it, at its centre's height.
+            // Sorted by the height of the leaf's centre above the plane.
             let height = plane.height(leaf.centre);
             touched.clear();
             let tris = &m.indices[leaf.indices.start as usize..leaf.indices.end as usize];
