@@ -133,6 +133,48 @@ pub fn simplified_wood(plant: &Plant, levels: u32) -> Mesh {
     mesh
 }
 
+/// Cells per side of the blocks a plane is cut into.
+const BLOCK: u32 = 8;
+
+/// The parts of a plane worth drawing (plane coordinates, min and max): for a cloud with lists,
+/// each row of `BLOCK²`-cell blocks holding any non-empty cell, merged along the row, so the
+/// rasteriser does not run the shader over the empty stretches of a large thin cluster's
+/// rectangle; the whole rectangle for the far cloud (low-resolution tiles only).
+fn occupied_rects(c: &layers::Cloud, p: &PlaneRecord) -> Vec<(Vec2, Vec2)> {
+    let (min, size) = (p.min(), p.size());
+    if !c.layered {
+        return vec![(min, min + size)];
+    }
+    let (nx, ny) = p.cells();
+    let cm = p.origin_cell[3];
+    let first = p.grid[2] as usize;
+    let occupied = |bx: u32, by: u32| {
+        (by * BLOCK..((by + 1) * BLOCK).min(ny)).any(|cy| {
+            (bx * BLOCK..((bx + 1) * BLOCK).min(nx))
+                .any(|cx| c.cells[first + (cy * nx + cx) as usize] != 0)
+        })
+    };
+    let mut out = Vec::new();
+    for by in 0..ny.div_ceil(BLOCK) {
+        let mut bx = 0;
+        while bx < nx.div_ceil(BLOCK) {
+            if !occupied(bx, by) {
+                bx += 1;
+                continue;
+            }
+            let start = bx;
+            while bx < nx.div_ceil(BLOCK) && occupied(bx, by) {
+                bx += 1;
+            }
+            let lo = min + Vec2::new(start as f32, by as f32) * (BLOCK as f32 * cm);
+            let hi =
+                (min + Vec2::new(bx as f32, (by + 1) as f32) * (BLOCK as f32 * cm)).min(min + size);
+            out.push((lo, hi));
+        }
+    }
+    out
+}
+
 impl BillboardCloud {
     /// Uploads every species' clouds and builds the pipelines.
     pub fn new(
@@ -198,17 +240,17 @@ impl BillboardCloud {
                         Vec3::from_slice(&r.u[..3]),
                         Vec3::from_slice(&r.v[..3]),
                     );
-                    let (min, size) = (r.min(), r.size());
-                    let base = vertices.len() as u32;
-                    for corner in [Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y] {
-                        let st = min + corner * size;
-                        vertices.push(CloudVertex {
-                            position: (o + u * st.x + v * st.y).to_array(),
-                            st: st.to_array(),
-                            plane: global,
-                        });
+                    for (lo, hi) in occupied_rects(c, rec) {
+                        let base = vertices.len() as u32;
+                        for st in [lo, Vec2::new(hi.x, lo.y), hi, Vec2::new(lo.x, hi.y)] {
+                            vertices.push(CloudVertex {
+                                position: (o + u * st.x + v * st.y).to_array(),
+                                st: st.to_array(),
+                                plane: global,
+                            });
+                        }
+                        indices.extend([0, 1, 2, 0, 2, 3].map(|i| base + i));
                     }
-                    indices.extend([0, 1, 2, 0, 2, 3].map(|i| base + i));
                 }
                 cells.extend_from_slice(&c.cells);
                 lists.extend_from_slice(&c.lists);
