@@ -30,6 +30,7 @@ pub mod lod;
 pub mod octahedral;
 pub mod params;
 pub mod registry;
+pub mod zfield;
 
 use crate::RenderError;
 use crate::bake::{BakeReport, CachePolicy};
