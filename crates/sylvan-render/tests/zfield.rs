@@ -365,3 +365,202 @@ fn zfield_shader_validates() {
     .validate(&module)
     .unwrap_or_else(|e| panic!("{label}: {}", e.emit_to_string(&source)));
 }
+
+// ---- BN12 §1's lighting effects, each measured on renders a wrong model fails. ----
+
+/// BN12's own model (no blend towards the reference's leaf response) and its 181 views (the
+/// light ray needs views near the sun: order 3's 25 are too coarse), with a foliage extinction
+/// for the test tree's 3 m crown.
+const BN12: [&str; 3] = ["zfield.normal_weight=0", "zfield.tau=1.5", "zfield.order=9"];
+
+/// A 7 × 7 stand of test trees, 7 m apart, centred on `AT`.
+fn stand() -> Vec<(Vec3, f32)> {
+    let mut trees = Vec::new();
+    for i in -3..=3 {
+        for j in -3..=3 {
+            let jitter = ((i * 7 + j * 13) as f32 * 0.37).sin();
+            trees.push((
+                AT + Vec3::new(i as f32 * 7.0 + jitter, 0.0, j as f32 * 7.0 - jitter),
+                (i * 3 + j) as f32 * 0.7,
+            ));
+        }
+    }
+    trees
+}
+
+/// The stand seen from `elevation_deg` above the horizon, from azimuth `azimuth_deg` (the
+/// direction from the stand towards the eye, from +Z towards +X), 60 m away.
+fn stand_view(elevation_deg: f32, azimuth_deg: f32, sun: Sun) -> Scene {
+    let (e, a) = (elevation_deg.to_radians(), azimuth_deg.to_radians());
+    let eye = Vec3::new(a.sin() * e.cos(), e.sin(), a.cos() * e.cos()) * 60.0;
+    let mut s = one_tree_scene(eye, sun, &stand(), flat());
+    s.camera.look_at = AT + Vec3::new(0.0, 6.0, 0.0);
+    s.camera.fov_deg = 30.0;
+    s
+}
+
+/// Mean luma of the central `2r`² window.
+fn centre_luma(img: &image::RgbImage, r: u32) -> f32 {
+    let c = SIZE / 2;
+    common::mean_luma(img, c - r, c - r, c + r, c + r)
+}
+
+#[test]
+fn a_forest_is_darker_facing_the_sun_than_with_the_sun_behind() {
+    // The eye is south of the stand (azimuth 180) 30° up looking north; the sun 30° up north
+    // (facing it) or south (behind the viewer: the backscatter direction).
+    let ratio = |model: &[&str], tag: &str| {
+        let facing = render(
+            &stand_view(30.0, 180.0, common::sun(0.0, 30.0)),
+            "zfield",
+            1,
+            model,
+        );
+        let behind = render(
+            &stand_view(30.0, 180.0, common::sun(180.0, 30.0)),
+            "zfield",
+            1,
+            model,
+        );
+        save(&format!("stand-facing-sun{tag}"), &facing);
+        save(&format!("stand-sun-behind{tag}"), &behind);
+        let (f, b) = (centre_luma(&facing, 24), centre_luma(&behind, 24));
+        eprintln!("stand luma{tag}: facing the sun {f:.1}, sun behind the viewer {b:.1}");
+        b / f
+    };
+    let bn12 = ratio(&BN12, "");
+    // Without the in-tree terms (τ = 0, a1 = 0) only the ground's shadows are left.
+    let flat_model = ratio(
+        &[
+            "zfield.normal_weight=0",
+            "zfield.a1=0",
+            "zfield.tau=0",
+            "zfield.order=9",
+        ],
+        "-flat",
+    );
+    assert!(
+        bn12 > 1.04,
+        "view-dependent reflectance: behind / facing {bn12}"
+    );
+    assert!(
+        bn12 > flat_model + 0.05,
+        "{bn12} vs the flat model's {flat_model}"
+    );
+}
+
+#[test]
+fn radiance_peaks_at_the_backscatter_direction() {
+    // Sun behind the viewer 35° up; the eye sweeps the principal plane. The window's mix of
+    // crowns, ground and gaps changes with elevation, so each view is divided by the same view
+    // under a model without view-light terms (τ = 0, a1 = 0): what is left is eq. 7–8's.
+    let sun = common::sun(180.0, 35.0);
+    let flat_model = [
+        "zfield.normal_weight=0",
+        "zfield.a1=0",
+        "zfield.tau=0",
+        "zfield.order=9",
+    ];
+    let sweep: Vec<(f32, f32)> = [15.0f32, 25.0, 35.0, 45.0, 55.0]
+        .iter()
+        .map(|&e| {
+            let img = render(&stand_view(e, 180.0, sun), "zfield", 1, &BN12);
+            save(&format!("sweep-{e}"), &img);
+            let flat = render(&stand_view(e, 180.0, sun), "zfield", 1, &flat_model);
+            (e, centre_luma(&img, 16) / centre_luma(&flat, 16))
+        })
+        .collect();
+    eprintln!("principal plane (elevation, luma / flat model's): {sweep:?}");
+    let peak = sweep.iter().max_by(|a, b| a.1.total_cmp(&b.1)).unwrap().0;
+    assert!(
+        (peak - 35.0).abs() <= 10.0,
+        "the hotspot is at 35°, the peak at {peak}°"
+    );
+    assert!(
+        sweep[2].1 > sweep[0].1 && sweep[2].1 > sweep[4].1,
+        "{sweep:?}"
+    );
+}
+
+/// The crown's silhouette ring (mask pixels within 2 px of the background) and its interior
+/// (more than 5 px in): mean luma of each.
+fn ring_and_core(img: &image::RgbImage, m: &[bool]) -> (f32, f32) {
+    let n = SIZE as i32;
+    let at = |x: i32, y: i32| x >= 0 && y >= 0 && x < n && y < n && m[(y * n + x) as usize];
+    let dist = |x: i32, y: i32| {
+        (1..=6)
+            .find(|&r| {
+                (-r..=r).any(|d| {
+                    !at(x + d, y - r) || !at(x + d, y + r) || !at(x - r, y + d) || !at(x + r, y + d)
+                })
+            })
+            .unwrap_or(7)
+    };
+    let (mut ring, mut core) = ((0.0f32, 0.0f32), (0.0f32, 0.0f32));
+    for y in 0..n {
+        for x in 0..n {
+            if !at(x, y) {
+                continue;
+            }
+            let p = img.get_pixel(x as u32, y as u32);
+            let l = 0.2126 * p[0] as f32 + 0.7152 * p[1] as f32 + 0.0722 * p[2] as f32;
+            match dist(x, y) {
+                1..=2 => ring = (ring.0 + l, ring.1 + 1.0),
+                6.. => core = (core.0 + l, core.1 + 1.0),
+                _ => {}
+            }
+        }
+    }
+    (ring.0 / ring.1.max(1.0), core.0 / core.1.max(1.0))
+}
+
+#[test]
+fn back_lit_silhouettes_are_brighter_than_the_centre() {
+    // Sun behind the tree, 20° up; the eye level with the crown.
+    let sun = common::sun(0.0, 20.0);
+    let eye = Vec3::new(0.0, 7.0, -24.0);
+    let scene = one_tree_scene(eye, sun, &[(AT, 0.0)], flat());
+    let bg = render(&one_tree_scene(eye, sun, &[], flat()), "zfield", 4, &[]);
+    let img = render(&scene, "zfield", 4, &BN12);
+    save("back-lit", &img);
+    let m = mask(&img, &bg);
+    let (ring, core) = ring_and_core(&img, &m);
+    eprintln!("back-lit crown: silhouette {ring:.1}, centre {core:.1}");
+    assert!(ring > 1.1 * core, "silverlining: {ring} vs {core}");
+    // The effect is the extinction along p_l − p_v: without it (τ = 0) it goes.
+    let img0 = render(
+        &scene,
+        "zfield",
+        4,
+        &["zfield.normal_weight=0", "zfield.tau=0"],
+    );
+    let (ring0, core0) = ring_and_core(&img0, &m);
+    eprintln!("τ = 0: silhouette {ring0:.1}, centre {core0:.1}");
+    assert!(
+        ring / core > ring0 / core0 + 0.1,
+        "{ring}/{core} vs τ=0 {ring0}/{core0}"
+    );
+}
+
+#[test]
+fn sky_light_leaves_a_trees_base_darker_than_its_top() {
+    // The sky term alone (sun_scale 0): eq. 9's δ_v and cylindrical hole.
+    let sun = common::sun(180.0, 40.0);
+    let eye = Vec3::new(0.0, 7.0, -24.0);
+    let scene = one_tree_scene(eye, sun, &[(AT, 0.0)], flat());
+    let img = render(
+        &scene,
+        "zfield",
+        4,
+        &["zfield.sun_scale=0", "zfield.order=9"],
+    );
+    save("sky-only", &img);
+    let cam = &scene.camera;
+    let top = common::luma_at(&img, cam, AT + Vec3::new(0.0, 9.2, -2.0), 3);
+    let base = common::luma_at(&img, cam, AT + Vec3::new(0.0, 4.8, -2.0), 3);
+    eprintln!("sky-lit crown: top {top:.1}, base {base:.1}");
+    assert!(
+        top > 1.2 * base,
+        "sky illumination: top {top} vs base {base}"
+    );
+}
