@@ -185,9 +185,9 @@ pub struct ZFieldDrawParams {
 impl Default for ZFieldDrawParams {
     fn default() -> Self {
         Self {
-            tau: 0.35,
-            sun_scale: 0.6,
-            normal_weight: 0.5,
+            tau: 2.0,
+            sun_scale: 0.45,
+            normal_weight: 0.0,
             a1: 0.2,
             a2: 20.0,
             sky_scale: 1.0,
