@@ -564,3 +564,42 @@ fn sky_light_leaves_a_trees_base_darker_than_its_top() {
         "sky illumination: top {top} vs base {base}"
     );
 }
+
+/// As a band of the `auto` chain: a tree mid-way through the cross-fade from the plant's meshes
+/// to its z-field is drawn by both bands (each with part of its presence) and covers what either
+/// covers alone — no hole (a band dropping the tree, or presence applied twice, fails).
+#[test]
+fn cross_fade_from_the_meshes_keeps_the_coverage() {
+    let sun = common::sun(150.0, 40.0);
+    let eye = Vec3::new(0.0, 5.0, -30.0);
+    let mut scene = one_tree_scene(eye, sun, &[(AT, 0.0)], flat());
+    let bg = render(&one_tree_scene(eye, sun, &[], flat()), "geometry", 4, &[]);
+    let covered = |img: &image::RgbImage| mask(img, &bg).iter().filter(|x| **x).count() as f32;
+    let geometry = covered(&render(&scene, "geometry", 4, &[]));
+    let zfield = covered(&render(&scene, "zfield", 4, &[]));
+    // The trunk base is 30 m away: the boundary at 30 m puts the tree mid-fade.
+    scene.lod_chain = vec!["geometry:0-30".into(), "zfield:30-".into()];
+    let options = RenderOptions {
+        width: SIZE,
+        height: SIZE,
+        spp: 4,
+        technique: "auto".into(),
+        cache: CachePolicy::Off,
+        settings: small_settings(),
+        ..Default::default()
+    };
+    let gpu = gpu();
+    let mut r = sylvan_render::Renderer::new(&gpu, &scene, &[common::test_tree()], &options)
+        .expect("renderer");
+    let stats = r.render(&gpu, &scene.camera, &scene.sun).expect("frame");
+    let img = image::DynamicImage::ImageRgba8(r.read_image(&gpu).unwrap()).into_rgb8();
+    save("cross-fade", &img);
+    let both = covered(&img);
+    let drawn = stats.trees_drawn;
+    eprintln!("covered px: geometry {geometry}, zfield {zfield}, mid-fade {both}; drawn {drawn:?}");
+    assert_eq!(drawn.get("geometry"), Some(&1), "{drawn:?}");
+    assert_eq!(drawn.get("zfield"), Some(&1), "{drawn:?}");
+    let lo = geometry.min(zfield) * 0.85;
+    let hi = geometry.max(zfield) * 1.15;
+    assert!((lo..=hi).contains(&both), "{both} outside {lo}..{hi}");
+}

@@ -14,9 +14,10 @@
 //! | `boxtree` | [`boxtree`] | LCV04 |
 //! | `hbt` | [`hbt`] | MNP01 |
 //! | `octahedral` | [`octahedral`] | industry baseline: hemi-octahedral impostor |
+//! | `zfield` | [`zfield`] | BN12 §5, §8: z-fields, sun/sky lighting, per-tree coverage masks |
 //! | `auto` | [`lod`] | the LOD chain: a technique per distance band, cross-faded |
 //!
-//! GPU-driven techniques (`Entry::gpu_driven`: `geometry`, `octahedral`, a chain of those)
+//! GPU-driven techniques (`Entry::gpu_driven`: `geometry`, `octahedral`, `zfield`, a chain of those)
 //! draw the tiled world from [`DrawContext::culled`] ([`crate::world`]); the others get every
 //! tree on the CPU in [`FrameInput::instances`].
 //!
