@@ -368,10 +368,15 @@ fn zfield_shader_validates() {
 
 // ---- BN12 §1's lighting effects, each measured on renders a wrong model fails. ----
 
-/// BN12's own model (no blend towards the reference's leaf response) and its 181 views (the
-/// light ray needs views near the sun: order 3's 25 are too coarse), with a foliage extinction
-/// for the test tree's 3 m crown.
-const BN12: [&str; 3] = ["zfield.normal_weight=0", "zfield.tau=1.5", "zfield.order=9"];
+/// BN12's own model (constant τ, no blend towards the reference's leaf response) and its 181
+/// views (the light ray needs views near the sun: order 3's 25 are too coarse), with a foliage
+/// extinction for the test tree's 3 m crown.
+const BN12: [&str; 4] = [
+    "zfield.normal_weight=0",
+    "zfield.tau=1.5",
+    "zfield.order=9",
+    "zfield.opacity_scaled_tau=false",
+];
 
 /// A 7 × 7 stand of test trees, 7 m apart, centred on `AT`.
 fn stand() -> Vec<(Vec3, f32)> {

@@ -20,7 +20,8 @@ struct ZViewFrame {
 struct ZParams {
     // x: tile texels; y: tiles per row; z: tiles per layer; w: grid order n.
     tiles: vec4<u32>,
-    // x: 1 / tiles per row; y: 1 / rows of tiles per layer; z: leaf translucency; w: unused.
+    // x: 1 / tiles per row; y: 1 / rows of tiles per layer; z: leaf translucency;
+    // w: opacity-scaled τ (1/0).
     atlas: vec4<f32>,
     // x: tau (1/m); y: sun scale; z: a1; w: a2 (eq. 7–8).
     sun: vec4<f32>,

@@ -149,7 +149,7 @@ impl ZField {
                 1.0 / color.per_row as f32,
                 1.0 / color.rows as f32,
                 LEAF_TRANSLUCENCY,
-                0.0,
+                if draw.opacity_scaled_tau { 1.0 } else { 0.0 },
             ],
             sun: [draw.tau, draw.sun_scale, draw.a1, draw.a2],
             sky: [

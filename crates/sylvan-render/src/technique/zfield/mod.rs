@@ -163,6 +163,9 @@ impl ParamTable for ZFieldBakeParams {
 pub struct ZFieldDrawParams {
     /// Foliage extinction τ of eq. 7 (per metre of path from p_l to p_v).
     pub tau: f32,
+    /// Scale τ per light ray by the optical depth the light view's opacity implies
+    /// (`ln(1 − α_l) / ln(0.01)`: 1 through dense foliage, less through sparse crowns).
+    pub opacity_scaled_tau: bool,
     /// Sun scale: ρ's phase function `p` (isotropic) in the renderer's units.
     pub sun_scale: f32,
     /// Blend of the isotropic phase towards the reference's leaf response at the baked normal
@@ -186,6 +189,7 @@ impl Default for ZFieldDrawParams {
     fn default() -> Self {
         Self {
             tau: 2.0,
+            opacity_scaled_tau: true,
             sun_scale: 0.45,
             normal_weight: 0.0,
             a1: 0.2,
@@ -203,6 +207,11 @@ impl ParamTable for ZFieldDrawParams {
             key: "tau",
             unit: "1/m",
             doc: "foliage extinction τ (eq. 7): sunlight falls as exp(−τ‖p_l − p_v‖)",
+        },
+        ParamDoc {
+            key: "opacity_scaled_tau",
+            unit: "bool",
+            doc: "scale τ per light ray by the light view's opacity (ln(1−α)/ln 0.01): sparse crowns attenuate less",
         },
         ParamDoc {
             key: "sun_scale",

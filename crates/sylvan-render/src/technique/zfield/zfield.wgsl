@@ -225,8 +225,14 @@ fn fs_zfield(in: ZOut) -> ZFragment {
     let p1 = pv - lm * dot(pv - c, lm);
     let zl = zfield3(sp, in.light_views.xyz, in.light_weights, p1, in.lod);
     var pl = pv;
+    var tau = zp.sun.x;
     if (zl.w > 0.004) {
         pl = p1 - lm * plane_distance(sp, zl.x, zl.w);
+        // `opacity_scaled_tau`: τ times the optical depth the light view's opacity implies,
+        // relative to an opaque chord (1 for dense crowns; less through sparse ones).
+        if (zp.atlas.w > 0.5) {
+            tau = tau * log(1.0 - min(zl.w, 0.99)) / log(0.01);
+        }
     }
     let path_m = max(dot(pl - pv, lm), 0.0) * in.base_scale.w;
     let world_l = instance_to_world(pl, in.base_scale, in.rot);
@@ -243,7 +249,7 @@ fn fs_zfield(in: ZOut) -> ZFragment {
     let ndl = dot(n, l);
     let leaf = max(ndl, 0.0) + zp.atlas.z * max(-ndl, 0.0);
     let phase = zp.sun.y * mix(1.0, leaf / 0.34, zp.sky.z);
-    let sun = frame.sun_color.rgb * albedo * phase * exp(-zp.sun.x * path_m) * hotspot(v, l)
+    let sun = frame.sun_color.rgb * albedo * phase * exp(-tau * path_m) * hotspot(v, l)
         * sun_visibility(world_l, vec3<f32>(0.0));
     // Eq. 9: sky × δ_v × the cylindrical hole of the local density, d below the crown's top
     // (the slope term (1 + n·u_z)/2 is 1: the terrain normal is not known here).
