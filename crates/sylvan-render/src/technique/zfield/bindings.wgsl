@@ -27,6 +27,8 @@ struct ZParams {
     sun: vec4<f32>,
     // x: sky scale; y: tree density Λ_h (trees/m²); z: normal weight; w: per-tree masks (1/0).
     sky: vec4<f32>,
+    // x: camera mip bias.
+    extra: vec4<f32>,
 };
 
 @group(1) @binding(0) var<storage, read> z_species: array<ZSpecies>;

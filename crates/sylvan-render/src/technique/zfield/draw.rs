@@ -45,6 +45,7 @@ struct GpuZParams {
     atlas: [f32; 4],
     sun: [f32; 4],
     sky: [f32; 4],
+    extra: [f32; 4],
 }
 
 /// The prepared z-field technique.
@@ -53,10 +54,13 @@ pub struct ZField {
     shadow_pipeline: wgpu::RenderPipeline,
     bind: wgpu::BindGroup,
     static_bytes: u64,
-    species: usize,
+    /// Per species: the model-space centre of its frames (the back-to-front sort of `blend`).
+    centres: Vec<Vec3>,
+    blend: bool,
     // Per frame, CPU-driven frames only (reused; nothing is allocated once grown).
     instances: Growable,
     staging: Vec<GpuTreeInstance>,
+    sort: Vec<(f32, GpuTreeInstance)>,
     ranges: [Range<u32>; PASSES],
 }
 
@@ -158,6 +162,7 @@ impl ZField {
                 draw.normal_weight,
                 if draw.per_tree_masks { 1.0 } else { 0.0 },
             ],
+            extra: [draw.lod_bias, 0.0, 0.0, 0.0],
         };
         let device = &gpu.device;
         let storage = |label, contents: &[u8]| {
@@ -209,7 +214,7 @@ impl ZField {
         );
         let module = sylvan_gpu::shader(gpu, "zfield", &super::shader_source());
         let buffers = [None, Some(GpuTreeInstance::LAYOUT)];
-        let build = |label, vs, fs, pass, layouts: &[&wgpu::BindGroupLayout]| {
+        let build = |label, vs, fs, pass, layouts: &[&wgpu::BindGroupLayout], blend| {
             pipeline::build(
                 gpu,
                 &PipelineSpec {
@@ -222,24 +227,38 @@ impl ZField {
                     pass,
                     cull: None,
                     depth_write: true,
-                    blend: None,
+                    blend,
                 },
             )
         };
-        // Opaque with per-tree coverage masks and p_v's depth: no sort, no blending.
-        let pipeline = build(
-            "zfield",
-            "vs_zfield",
-            "fs_zfield",
-            PassKind::Main,
-            &[&frame.main_layout, &bind_layout],
-        );
+        // Opaque with per-tree coverage masks and p_v's depth: no sort, no blending; or
+        // (`blend`) premultiplied over, sorted back to front, p_v's depth still written.
+        let pipeline = if draw.blend {
+            build(
+                "zfield_blend",
+                "vs_zfield",
+                "fs_zfield_blend",
+                PassKind::Main,
+                &[&frame.main_layout, &bind_layout],
+                Some(common::PREMULTIPLIED_OVER),
+            )
+        } else {
+            build(
+                "zfield",
+                "vs_zfield",
+                "fs_zfield",
+                PassKind::Main,
+                &[&frame.main_layout, &bind_layout],
+                None,
+            )
+        };
         let shadow_pipeline = build(
             "zfield_shadow",
             "vs_zfield_shadow",
             "fs_zfield_shadow",
             PassKind::Shadow,
             &[&frame.shadow_layout, &bind_layout],
+            None,
         );
         let static_bytes = color.bytes
             + normal.bytes
@@ -252,7 +271,9 @@ impl ZField {
             shadow_pipeline,
             bind,
             static_bytes,
-            species: plants.len(),
+            centres: baked.iter().map(|b| Vec3::from(b.centre)).collect(),
+            blend: draw.blend,
+            sort: Vec::new(),
             instances: Growable::new(gpu, "zfield_instances", 1 << 16),
             staging: Vec::new(),
             ranges: std::array::from_fn(|_| 0..0),
@@ -275,20 +296,28 @@ impl Technique for ZField {
     ) -> Result<(), RenderError> {
         self.staging.clear();
         for pass in 0..PASSES {
-            let start = self.staging.len() as u32;
-            for s in 0..self.species {
-                self.staging
-                    .extend(
-                        input
-                            .instances
-                            .records(pass, s)
-                            .iter()
-                            .map(|rec| GpuTreeInstance {
-                                base_scale: rec.base_scale,
-                                rot: [rec.rot[0], rec.rot[1], s as f32 + rec.rot[2], rec.rot[3]],
-                            }),
-                    );
+            self.sort.clear();
+            for (s, centre) in self.centres.iter().enumerate() {
+                for rec in input.instances.records(pass, s) {
+                    let [x, y, z, scale] = rec.base_scale;
+                    let (c, sn) = (rec.rot[0], rec.rot[1]);
+                    let q = *centre * scale;
+                    let world = Vec3::new(x + c * q.x + sn * q.z, y + q.y, z - sn * q.x + c * q.z);
+                    self.sort.push((
+                        world.distance_squared(input.eye),
+                        GpuTreeInstance {
+                            base_scale: rec.base_scale,
+                            rot: [rec.rot[0], rec.rot[1], s as f32 + rec.rot[2], rec.rot[3]],
+                        },
+                    ));
+                }
             }
+            if pass == 0 && self.blend {
+                // Back to front: premultiplied "over" needs the far trees first.
+                self.sort.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
+            }
+            let start = self.staging.len() as u32;
+            self.staging.extend(self.sort.iter().map(|x| x.1));
             self.ranges[pass] = start..self.staging.len() as u32;
         }
         self.instances
@@ -337,11 +366,12 @@ impl Technique for ZField {
         vec![IndirectDraw::vertices(0, 6)]
     }
 
-    /// One list of every species per pass; opaque (masks and depth), so unsorted.
+    /// One list of every species per pass; with masks opaque, so unsorted; `blend` sorts the
+    /// camera's back to front.
     fn list_layout(&self) -> ListLayout {
         ListLayout {
             per_species: false,
-            sort_camera: false,
+            sort_camera: self.blend,
         }
     }
 

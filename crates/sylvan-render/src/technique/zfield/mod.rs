@@ -183,6 +183,11 @@ pub struct ZFieldDrawParams {
     /// Per-tree coverage masks (BN12 §8); false: every tree shares one mask (plain alpha to
     /// coverage: overlapping trees cover α, not 1 − (1 − α)ⁿ).
     pub per_tree_masks: bool,
+    /// Camera pass blended premultiplied "over", back to front (the cull's sorted list),
+    /// instead of coverage masks; p_v's depth is still written.
+    pub blend: bool,
+    /// Mip bias of the camera pass (negative: sharper), −4 to 4.
+    pub lod_bias: f32,
 }
 
 impl Default for ZFieldDrawParams {
@@ -190,13 +195,15 @@ impl Default for ZFieldDrawParams {
         Self {
             tau: 2.0,
             opacity_scaled_tau: true,
-            sun_scale: 0.45,
-            normal_weight: 0.0,
+            sun_scale: 0.4,
+            normal_weight: 0.5,
             a1: 0.2,
             a2: 20.0,
             sky_scale: 1.0,
             density_per_ha: 0.0,
             per_tree_masks: true,
+            blend: true,
+            lod_bias: -1.0,
         }
     }
 }
@@ -248,6 +255,16 @@ impl ParamTable for ZFieldDrawParams {
             unit: "bool",
             doc: "per-tree coverage masks (BN12 §8); false: one shared mask (plain alpha to coverage)",
         },
+        ParamDoc {
+            key: "blend",
+            unit: "bool",
+            doc: "blend premultiplied back to front instead of coverage masks (p_v's depth still written)",
+        },
+        ParamDoc {
+            key: "lod_bias",
+            unit: "mips",
+            doc: "mip bias of the camera pass (negative: sharper; −4 to 4)",
+        },
     ];
 
     fn validate(&self) -> Result<(), String> {
@@ -259,6 +276,7 @@ impl ParamTable for ZFieldDrawParams {
             ("a2", self.a2, 0.0, 1000.0),
             ("sky_scale", self.sky_scale, 0.0, 100.0),
             ("density_per_ha", self.density_per_ha, 0.0, 1e6),
+            ("lod_bias", self.lod_bias, -4.0, 4.0),
         ];
         for (key, v, lo, hi) in ranges {
             if !(lo..=hi).contains(&v) {

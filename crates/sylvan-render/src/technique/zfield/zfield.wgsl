@@ -86,7 +86,10 @@ fn z_vertex(in: ZIn, inst_in: TreeInstance, toward_world: vec3<f32>, is_dir: boo
         let row_x = vec3<f32>(frame.view_proj[0].x, frame.view_proj[1].x, frame.view_proj[2].x);
         pixel_m = frame.shadow_params.x * 2.0 / max(length(row_x), 1e-6);
     }
-    out.lod = max(log2(pixel_m / texel_m), 0.0);
+    // The camera pass samples `lod_bias` mips finer (sharper; measured closer to the
+    // reference on the default scene), casters at their texel footprint.
+    let bias = select(zp.extra.x, 0.0, is_dir);
+    out.lod = max(log2(pixel_m / texel_m) + bias, 0.0);
     return out;
 }
 
@@ -193,6 +196,17 @@ fn vs_zfield(in: ZIn, inst: TreeInstance) -> ZOut {
 
 @fragment
 fn fs_zfield(in: ZOut) -> ZFragment {
+    return z_fragment(in, true);
+}
+
+// `blend`: premultiplied "over" in back-to-front order (the camera list sorted), p_v's depth
+// still written; no masks.
+@fragment
+fn fs_zfield_blend(in: ZOut) -> ZFragment {
+    return z_fragment(in, false);
+}
+
+fn z_fragment(in: ZOut, masked: bool) -> ZFragment {
     let sp = z_species[in.views.w];
     let c = sp.centre_radius.xyz;
     // Step 2: p, where the view ray meets the plane through o facing the eye (the quad).
@@ -215,7 +229,10 @@ fn fs_zfield(in: ZOut) -> ZFragment {
     let delta_v = clamp(z2.z / alpha_v, 0.0, 1.0);
     // Coverage: presence (LOD cross-fade) by optical depth, then the tree's mask.
     let a = presence_alpha(alpha_v, in.rot.w);
-    if (a <= mask_threshold(in.pos.xy, in.base_scale, in.rot.z)) {
+    if (masked && a <= mask_threshold(in.pos.xy, in.base_scale, in.rot.z)) {
+        discard;
+    }
+    if (!masked && a < 0.004) {
         discard;
     }
     let world = instance_to_world(pv, in.base_scale, in.rot);
@@ -259,14 +276,14 @@ fn fs_zfield(in: ZOut) -> ZFragment {
     let sky = albedo * sky_light(vec3<f32>(0.0, 1.0, 0.0)) * zp.sky.x * delta_v * hole;
     let lit = debug_tint(apply_fog(sun + sky, world), world, TECHNIQUE_ZFIELD);
     var out: ZFragment;
-    out.color = vec4<f32>(lit, 1.0);
+    out.color = select(vec4<f32>(lit * a, a), vec4<f32>(lit, 1.0), masked);
     let clip = frame.view_proj * vec4<f32>(world, 1.0);
     out.depth = clamp(clip.z / max(clip.w, 1e-6), 0.0, 1.0);
     return out;
 }
 
 // Shadow casters (BN12 §5): the quad facing the sun, step 5 only, at the max depth z̄ (the
-// trees' back side, so they do not shadow their own lit side); coverage stochastic (the 3×3
+// trees' back side, so they do not shadow their own lit side); coverage thresholded (the 3×3
 // PCF softens it) — the depth-only cascades cannot store opacity.
 @vertex
 fn vs_zfield_shadow(in: ZIn, inst: TreeInstance) -> ZOut {
@@ -282,7 +299,12 @@ fn fs_zfield_shadow(in: ZOut) -> @builtin(frag_depth) f32 {
     if (z.w < 0.004) {
         discard;
     }
-    if (presence_alpha(z.w, in.rot.w) <= hash13(vec3<f32>(in.pos.xy, 3.0 + 97.0 * in.rot.z))) {
+    // Opaque where α > 1/2 (measured closest to the geometry's alpha-tested casters: ꟻLIP
+    // 0.0631 vs 0.0648 stochastic on the default scene); stochastic by opacity while the tree
+    // fades (an LOD transition), so its shadow fades too.
+    let a = presence_alpha(z.w, in.rot.w);
+    let threshold = select(0.5, hash13(vec3<f32>(in.pos.xy, 3.0 + 97.0 * in.rot.z)), in.rot.w < 0.999);
+    if (a <= threshold) {
         discard;
     }
     let back = p - lm * plane_distance(sp, z.y, z.w);
