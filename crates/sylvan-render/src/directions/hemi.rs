@@ -27,7 +27,7 @@ impl HemiGrid {
     /// BN12 §5: 181 views (`n = 9`).
     pub const BN12: HemiGrid = HemiGrid { n: 9 };
 
-    /// The grid of order `n` (1..=[`MAX_ORDER`]); `None` outside that range.
+    /// The grid of order `n` (1..=32); `None` outside that range.
     pub fn new(n: u32) -> Option<Self> {
         (1..=MAX_ORDER).contains(&n).then_some(Self { n })
     }

@@ -25,11 +25,16 @@
 //! `ρ L_sky δ_v / (1 + d² Λ_h / 4)`, `d` the depth of `p_v` below the tree's top, `Λ_h` the
 //! scene's tree density. Casters (§5): the quad facing the sun, step 5 only, at `z̄`.
 //!
-//! **Coverage** (§8): opaque fragments kept where `α_v` (times the LOD presence, by optical
-//! depth) exceeds a threshold hashed from (pixel, tree): n uncorrelated trees of opacity α
-//! cover `1 − (1 − α)ⁿ` of a pixel's samples. The renderer has no MSAA path: its samples are
-//! the supersamples of `--spp` (box-resolved), so the masks are drawn per supersample (the
-//! paper's per-tree "combination table" of coverage masks becomes a per-tree hash).
+//! **Coverage** (§8): with `blend = false`, opaque fragments kept where `α_v` (times the LOD
+//! presence, by optical depth) exceeds a threshold hashed from (pixel, tree): n uncorrelated
+//! trees of opacity α cover `1 − (1 − α)ⁿ` of a pixel's samples, with no sort. The renderer
+//! has no MSAA path: its samples are the supersamples of `--spp` (box-resolved), so the masks
+//! are drawn per supersample (the paper's per-tree "combination table" of coverage masks
+//! becomes a per-tree hash; `per_tree_masks = false` is plain alpha to coverage, α not
+//! `1 − (1 − α)ⁿ`). **Default** (`blend = true`): premultiplied "over" on the cull's camera
+//! list sorted back to front, p_v's depth still written — at 1 spp the masks' noise cost
+//! ꟻLIP 0.0739 vs 0.0678 on the default scene (same other settings), so masks are the
+//! choice for supersampled or MSAA-like output, blending for 1 spp.
 //!
 //! **Deviations**, each stated:
 //! - Directions: the diamond grid is near-uniform, not exactly uniform; the "3 closest views"
@@ -40,20 +45,42 @@
 //!   25 directions at `n = 9`; each view's opacity × `1 − exp(−ao_density · depth behind its
 //!   front surface)` at a 32² mip), cosine-weighted over the upper hemisphere.
 //! - The phase function is isotropic scaled by `sun_scale` (the renderer's sun has no 1/π);
-//!   `normal_weight` > 0 blends it towards the reference's leaf response at the baked normal
-//!   (Lambert + the geometry's diffuse transmission) — 0 is BN12's model.
+//!   `normal_weight` (default 0.5) blends it towards the reference's leaf response at the
+//!   baked normal (Lambert + the geometry's diffuse transmission) — 0 is BN12's model
+//!   (measured 0.0648 with 0.5 vs 0.0678 with 0 on the default scene).
 //! - Sky: `L_sky` is the renderer's hemispherical sky seen by an upward normal; the slope term
 //!   `(1 + n·u_z)/2` is 1 (the terrain normal is not known in the tree shader); `Λ_h` is one
 //!   value per scene (placed trees over the terrain area, or `density_per_ha`), not a map.
-//! - Shadows store no opacity (the cascades are depth-only): casters are stochastic by `α`
-//!   and the 3×3 PCF softens them.
+//! - Shadows store no opacity (the cascades are depth-only): casters are opaque where `α > ½`
+//!   (stochastic by `α` only while a tree fades) and the 3×3 PCF softens them (stochastic
+//!   casters measured 0.0648 vs 0.0631 on the default scene).
+//! - `opacity_scaled_tau` (default on): τ is scaled per light ray by `ln(1 − α_l)/ln 0.01`, the
+//!   optical depth the light view's opacity implies relative to an opaque chord, so sparse
+//!   crowns (and trunks below them) are not lit as if behind solid foliage; off is BN12's
+//!   constant τ.
+//! - Camera mips are sampled `lod_bias` (−1) finer than the pixel footprint (0.0631 → 0.0615).
 //! - Ground (eq. 10–12) is not implemented: the terrain shader is shared and has no coverage
 //!   input yet; the ground gets the renderer's own sun (with the z-field shadows) and sky.
+//!
+//! **Parameters fitted** (draw keys, no re-bake) against `geometry --spp 16`: τ, `sun_scale`,
+//! `normal_weight`, `sky_scale` on one pine, prunus and chestnut at 160 px (τ 1–3 within 0.001
+//! ꟻLIP of each other, kept 2/m) and on the default scene (`sun_scale` 0.4 with
+//! `normal_weight` 0.5; `sky_scale` 1; `a1` 0.2 and `a2` 20 are BN12 fig. 8's values, and
+//! `a1` trades against `sun_scale` off the hotspot).
 //!
 //! **Cost**: per pixel 3 × 3 z-field fetches (two view iterations, one light) + 3 × 2 colour
 //! and normal fetches; the fragment depth is written (no early depth test). **Memory**:
 //! `views × tile² × 4 B × 3 images × 4/3` per plant — 47 MB at 181 × 128² (BN12: 45 MB at
-//! 181 × 256² for the z-field alone).
+//! 181 × 256² for the z-field alone). The default tile is 128, not BN12's 256: 256² is
+//! 190 MB per plant (the default scene's four species would hold 760 MB of atlases on a CPU
+//! rasteriser) and bakes in 16–21 s; 128² bakes in 7–8 s (pine, prunus; chestnut 29 s, its
+//! 205k-triangle leaves) and is what the measurements use.
+//!
+//! **Measured** (lavapipe, `scripts/measure-zfield.sh`, BENCHMARKS.md "`zfield`"): default
+//! scene 1280×720 ꟻLIP 0.0617 vs `geometry --spp 16` (1-spp geometry 0.0499, octahedral
+//! 0.0815); one pine at 256/128/64/16 px 0.0494/0.0447/0.0468/0.0610 (1-spp geometry
+//! 0.0277/0.0452/0.0466/0.1277); prunus and chestnut 0.20–0.43 (octahedral 0.23–0.45): sparse
+//! broadleaf domes smear when magnified. Frame time 1.26–1.30× octahedral's (same quads).
 
 pub mod bake;
 mod draw;
