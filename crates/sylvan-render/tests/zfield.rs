@@ -617,3 +617,83 @@ fn cross_fade_from_the_meshes_keeps_the_coverage() {
     let hi = geometry.max(zfield) * 1.15;
     assert!((lo..=hi).contains(&both), "{both} outside {lo}..{hi}");
 }
+
+/// Two crowns 2.2 m apart interpenetrate (radius 3 m): with p_v's depth each z-field hides the
+/// other only where its reconstructed surface is nearer, so the share of the overlap where the
+/// farther (red) tree shows is close to the geometry's. A z-field cut at its quad (the plane
+/// through its centre) would hide the red crown behind the whole green one.
+#[test]
+fn z_fields_intersect_each_other() {
+    let sun = common::sun(180.0, 40.0);
+    let eye = Vec3::new(0.0, 6.0, -26.0);
+    let mut red = common::test_tree();
+    red.name = "red-test-tree".into();
+    for c in &mut red.leaves.colors {
+        *c = [0.45, 0.05, 0.03];
+    }
+    let plants = [common::test_tree(), red];
+    let far = AT + Vec3::new(1.8, 0.0, 1.3);
+    let scene = |trees: &[(Vec3, u32)]| {
+        let mut s = one_tree_scene(eye, sun, &[], flat());
+        s.species.push(sylvan_scene::Species {
+            name: "red".into(),
+            plant: sylvan_scene::PlantSource::Preset("test".into()),
+            height_m: [10.0, 10.0],
+        });
+        s.trees = trees
+            .iter()
+            .enumerate()
+            .map(|(i, &(position, species))| TreeInstance {
+                position,
+                species,
+                seed: i as u32,
+                height: 10.0,
+                rotation: 0.0,
+            })
+            .collect();
+        s
+    };
+    let draw = |s: &Scene, t: &str| {
+        let options = RenderOptions {
+            width: SIZE,
+            height: SIZE,
+            spp: 4,
+            technique: t.into(),
+            cache: CachePolicy::Off,
+            settings: small_settings(),
+            ..Default::default()
+        };
+        common::render_with_options(&gpu(), s, &plants, &options).0
+    };
+    let bg = draw(&scene(&[]), "geometry");
+    let green_alone = mask(&draw(&scene(&[(AT, 0)]), "geometry"), &bg);
+    let red_alone = mask(&draw(&scene(&[(far, 1)]), "geometry"), &bg);
+    let both = scene(&[(AT, 0), (far, 1)]);
+    let red_share = |img: &image::RgbImage| {
+        let (mut redder, mut n) = (0.0f32, 0.0f32);
+        for (i, p) in img.pixels().enumerate() {
+            if green_alone[i] && red_alone[i] {
+                n += 1.0;
+                if p[0] as f32 > p[1] as f32 {
+                    redder += 1.0;
+                }
+            }
+        }
+        (redder / n.max(1.0), n)
+    };
+    let geo = draw(&both, "geometry");
+    let z = draw(&both, "zfield");
+    save("intersect-geometry", &geo);
+    save("intersect-zfield", &z);
+    let ((rg, n), (rz, _)) = (red_share(&geo), red_share(&z));
+    eprintln!("overlap {n} px: red (farther) tree shows in geometry {rg:.3}, zfield {rz:.3}");
+    assert!(n > 200.0, "the crowns overlap on screen ({n} px)");
+    assert!(
+        rg > 0.15,
+        "the farther crown pierces the nearer in the geometry ({rg})"
+    );
+    assert!(
+        (rz - rg).abs() < 0.15 && rz > 0.1,
+        "zfield {rz} vs geometry {rg}"
+    );
+}
