@@ -217,6 +217,8 @@ pub struct PlantStats {
     pub instanced_bytes: usize,
     /// Bytes of the flattened meshes (44 B per vertex + 4 B per index).
     pub flattened_bytes: usize,
+    /// Bytes of the flattened leaf mesh alone (as `flattened_bytes`).
+    pub leaf_mesh_bytes: usize,
     /// Bounding box minimum, metres.
     pub bbox_min: [f32; 3],
     /// Bounding box maximum, metres.
@@ -239,6 +241,7 @@ impl Plant {
             instance_levels: self.instancing.levels(),
             instanced_bytes: self.instancing.bytes(),
             flattened_bytes: self.wood.bytes() + self.leaves.bytes(),
+            leaf_mesh_bytes: self.leaves.bytes(),
             bbox_min: self.bbox_min,
             bbox_max: self.bbox_max,
         }

@@ -385,7 +385,14 @@ impl Renderer {
             });
         self.timer.begin(&mut encoder);
         let cpu_start = std::time::Instant::now();
+        let windows = match self.world {
+            Some(_) => self.technique.list_windows(self.pixels_per_metre(&view)),
+            None => None,
+        };
         if let Some(world) = &mut self.world {
+            if let Some(w) = &windows {
+                world.set_windows(w);
+            }
             let mut frustums: [Option<Frustum>; 1 + CASCADES] = Default::default();
             frustums[0] = Some(frustum);
             for (f, c) in frustums[1..].iter_mut().zip(&cascades) {

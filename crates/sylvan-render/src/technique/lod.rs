@@ -229,6 +229,8 @@ pub struct Chain {
     bands: Vec<Band>,
     techniques: Vec<Box<dyn Technique>>,
     lists: Vec<Instances>,
+    /// Lists each band's technique asks of the GPU cull.
+    request_counts: Vec<usize>,
 }
 
 impl Chain {
@@ -278,14 +280,31 @@ impl Chain {
                 cx.population.species_count(),
             ));
         }
+        let request_counts = techniques.iter().map(|t| t.list_requests().len()).collect();
         Ok(Built {
             technique: Box::new(Self {
                 bands,
                 techniques,
                 lists,
+                request_counts,
             }),
             reports,
         })
+    }
+}
+
+impl Chain {
+    /// Band `i`'s presence window: rising over ±FADE of its start, falling over ±FADE of its
+    /// end (open at the chain's two ends).
+    fn band_window(&self, i: usize) -> [f32; 4] {
+        let (b, n) = (&self.bands[i], self.bands.len());
+        let (first, last) = (i == 0, i + 1 == n);
+        [
+            if first { -1e30 } else { b.start * (1.0 - FADE) },
+            if first { -1e30 } else { b.start * (1.0 + FADE) },
+            if last { 1e30 } else { b.end * (1.0 - FADE) },
+            if last { 1e30 } else { b.end * (1.0 + FADE) },
+        ]
     }
 }
 
@@ -319,13 +338,19 @@ impl Technique for Chain {
 
     fn draw(&self, pass: &mut wgpu::RenderPass<'_>, ctx: &DrawContext<'_>) -> DrawCounts {
         let mut counts = DrawCounts::default();
+        // Where each band's lists start in `ctx.culled` (a technique may ask for several).
+        let mut firsts = Vec::with_capacity(self.request_counts.len() + 1);
+        firsts.push(0);
+        for n in &self.request_counts {
+            firsts.push(firsts.last().copied().unwrap_or(0) + n);
+        }
         for (i, (t, list)) in self.techniques.iter().zip(&self.lists).enumerate() {
             let sub = DrawContext {
                 pass: ctx.pass,
                 frame_bind: ctx.frame_bind,
                 instances: list,
                 ranges: &list.ranges[ctx.pass],
-                culled: ctx.culled.get(i..=i).unwrap_or(&[]),
+                culled: ctx.culled.get(firsts[i]..firsts[i + 1]).unwrap_or(&[]),
             };
             counts += t.draw(pass, &sub);
         }
@@ -334,40 +359,41 @@ impl Technique for Chain {
 
     /// One request per band: its technique's lists, presence by the band's cross-fades.
     fn list_requests(&self) -> Vec<crate::world::ListRequest> {
-        let n = self.bands.len();
         self.techniques
             .iter()
-            .zip(&self.bands)
             .enumerate()
-            .flat_map(|(i, (t, b))| {
-                let window = [
-                    if i == 0 {
-                        -1e30
-                    } else {
-                        b.start * (1.0 - FADE)
-                    },
-                    if i == 0 {
-                        -1e30
-                    } else {
-                        b.start * (1.0 + FADE)
-                    },
-                    if i + 1 == n {
-                        1e30
-                    } else {
-                        b.end * (1.0 - FADE)
-                    },
-                    if i + 1 == n {
-                        1e30
-                    } else {
-                        b.end * (1.0 + FADE)
-                    },
-                ];
+            .flat_map(|(i, t)| {
+                let window = self.band_window(i);
                 t.list_requests().into_iter().map(move |mut r| {
-                    r.window = window;
+                    r.window = crate::world::intersect_windows(r.window, window);
                     r
                 })
             })
             .collect()
+    }
+
+    /// Each band's technique's windows of this frame (its own, or those of its requests),
+    /// inside the band's.
+    fn list_windows(&self, pixels_per_metre: f32) -> Option<Vec<[f32; 4]>> {
+        if self
+            .techniques
+            .iter()
+            .all(|t| t.list_windows(pixels_per_metre).is_none())
+        {
+            return None;
+        }
+        let mut out = Vec::new();
+        for (i, t) in self.techniques.iter().enumerate() {
+            let band = self.band_window(i);
+            let own = t
+                .list_windows(pixels_per_metre)
+                .unwrap_or_else(|| t.list_requests().iter().map(|r| r.window).collect());
+            out.extend(
+                own.into_iter()
+                    .map(|w| crate::world::intersect_windows(w, band)),
+            );
+        }
+        Some(out)
     }
 
     fn bytes(&self) -> u64 {

@@ -13,16 +13,19 @@
 //! | `geometry` | [`geometry`] | reference: full meshes, the ground truth |
 //! | `boxtree` | [`boxtree`] | LCV04 |
 //! | `hbt` | [`hbt`] | MNP01 |
+//! | `billboard-cloud` | [`bcloud`] | GPSS07 |
 //! | `octahedral` | [`octahedral`] | industry baseline: hemi-octahedral impostor |
 //! | `zfield` | [`zfield`] | BN12 §5, §8: z-fields, sun/sky lighting, per-tree coverage masks |
 //! | `auto` | [`lod`] | the LOD chain: a technique per distance band, cross-faded |
 //!
-//! GPU-driven techniques (`Entry::gpu_driven`: `geometry`, `octahedral`, `zfield`, a chain of those)
+//! GPU-driven techniques (`Entry::gpu_driven`: `geometry`, `octahedral`, `billboard-cloud`,
+//! `zfield`, a chain of those)
 //! draw the tiled world from [`DrawContext::culled`] ([`crate::world`]); the others get every
 //! tree on the CPU in [`FrameInput::instances`].
 //!
 //! Adding a technique: docs/DESIGN.md, "Adding a technique".
 
+pub mod bcloud;
 pub mod boxtree;
 pub(crate) mod common;
 pub mod geometry;
@@ -198,6 +201,12 @@ pub trait Technique {
             draws: self.indirect_draws(),
             window: crate::world::ListRequest::ALL,
         }]
+    }
+    /// This frame's window per [`Technique::list_requests`] entry, for a technique whose
+    /// windows follow the view's apparent size (`pixels_per_metre` as in [`FrameInput`]);
+    /// `None`: the windows of `list_requests` hold.
+    fn list_windows(&self, _pixels_per_metre: f32) -> Option<Vec<[f32; 4]>> {
+        None
     }
 }
 

@@ -89,6 +89,7 @@ pub static REGISTRY: &[Entry] = &[
     super::boxtree::ENTRY,
     super::hbt::ENTRY,
     super::octahedral::ENTRY,
+    super::bcloud::ENTRY,
     super::zfield::ENTRY,
     super::lod::ENTRY,
 ];

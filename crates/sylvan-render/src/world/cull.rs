@@ -59,6 +59,18 @@ impl ListRequest {
     pub const ALL: [f32; 4] = [-1e30, -1e30, 1e30, 1e30];
 }
 
+/// The window inside both `a` and `b`: the later rise and the earlier fall (exact where one
+/// of them is [`ListRequest::ALL`] or they do not overlap; a close bound where both fade at
+/// the same place).
+pub fn intersect_windows(a: [f32; 4], b: [f32; 4]) -> [f32; 4] {
+    [
+        a[0].max(b[0]),
+        a[1].max(b[1]),
+        a[2].min(b[2]),
+        a[3].min(b[3]),
+    ]
+}
+
 /// One draw a technique makes from each pass's list of a group (its species, or 0 for a
 /// mixed list): an index range drawn once per listed tree, or `vertices` non-indexed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -20,7 +20,7 @@
 mod cull;
 mod produce;
 
-pub use cull::{Culled, IndirectDraw, ListLayout, ListRequest};
+pub use cull::{Culled, IndirectDraw, ListLayout, ListRequest, intersect_windows};
 
 use crate::RenderError;
 use crate::frame::{CASCADES, Frustum};
@@ -254,6 +254,14 @@ impl World {
 
     /// The lists and draw arguments of the last [`World::prepare`], one per request, for the
     /// techniques' draws.
+    /// This frame's presence window of each request (in [`World::new`]'s order; extra or
+    /// missing entries are ignored).
+    pub(crate) fn set_windows(&mut self, windows: &[[f32; 4]]) {
+        for (r, &w) in self.requests.iter_mut().zip(windows) {
+            r.window = w;
+        }
+    }
+
     pub(crate) fn culled(&self) -> Vec<Culled<'_>> {
         self.culls.iter().map(cull::Cull::culled).collect()
     }

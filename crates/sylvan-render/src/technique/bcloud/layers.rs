@@ -1,0 +1,705 @@
+//! GPSS07 §4.2 and §5.2 on the CPU: per plane the hash texture (a grid of cells, each the
+//! start and length of a list), the lists of overlapping leaf fragments sorted front to back by
+//! an exact sort, one record per leaf (where its image lies on the plane, which image, its
+//! normal frame, colour and ambient occlusion at the four corners of its image's box) and the
+//! low-resolution images the shader level of detail falls back to (§5.1), evaluated from the
+//! very lists the shader walks.
+//!
+//! Deviations, each for a stated reason:
+//! - **Records per leaf, lists of record numbers.** GPSS07 stores a full record per (cell,
+//!   leaf) fragment; here a list entry is a 4-byte record number and the 48-byte record is
+//!   stored once per leaf: the same walk with one more indirection and several times less
+//!   memory (a leaf overlaps several cells).
+//! - **An affine map instead of an orientation index.** GPSS07 picks a leaf image by an
+//!   orientation index and scales it; a leaf projected orthogonally onto a plane is an affine
+//!   image of its texture, so each record holds that map (fitted by least squares to the
+//!   leaf's vertices, exact for a flat leaf): leaf positions, sizes and orientations are kept
+//!   exactly and one leaf image serves every leaf.
+//! - **Fragments from the leaves' triangles.** GPSS07 splats each leaf as a point sprite of its
+//!   bounding square and depth-peels the sprites; a cell here lists the leaves whose projected
+//!   triangles overlap it (exact 2D separating-axis test), so no cell lists a leaf that cannot
+//!   cover it and none misses one that does. A leaf is turned towards its plane about its
+//!   centre before it is projected ([`Plane::leaf_st`]), and the order is the height of its
+//!   centre above the plane, descending (ties by leaf number): front to back from the plane's
+//!   front side, back to front read from its other end.
+//! - **Ambient occlusion per vertex is the reference's** (`crown_occlusion` of
+//!   `shaders/frame.wgsl`, the term `geometry` shades every leaf vertex with), extrapolated to
+//!   the leaf's box corners by least squares (fig. 11), so the technique matches the ground
+//!   truth it is measured against.
+//! - **Low-resolution images** are one square tile per plane and side (front side, back side),
+//!   stretched over the rectangle, holding premultiplied albedo + coverage and the normal
+//!   facing that side with the occlusion in alpha (the shared baker's tile format and mips).
+
+use super::cluster::{Leaf, Plane};
+use crate::bake::image::{TileImage, TileLevel};
+use bytemuck::{Pod, Zeroable};
+use glam::{Vec2, Vec3};
+use sylvan_plant::{LeafTexture, Plant};
+
+/// Most entries in one cell's list (the hash texel stores the length in 8 bits).
+pub const MAX_LIST: usize = 255;
+/// Most list entries of one level (the hash texel stores the start in 24 bits).
+pub const MAX_ENTRIES: usize = 1 << 24;
+/// Most cells along one side of a plane's hash grid.
+pub const MAX_CELLS_PER_SIDE: u32 = 1024;
+
+/// One leaf as the shader reads it (48 bytes).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
+pub struct LeafRecord {
+    /// Plane point where the leaf image's `uv = 0` lies (metres, plane coordinates).
+    pub origin: [f32; 2],
+    /// Column-major 2×2 map from plane offsets to leaf `uv`.
+    pub inv: [f32; 4],
+    /// The leaf's `uv` box: `pack2x16unorm(min)`, `pack2x16unorm(max)`.
+    pub uv_box: [u32; 2],
+    /// Front normal (model space), octahedral `pack2x16snorm`.
+    pub normal: u32,
+    /// Direction of `+u` on the leaf (model space), octahedral `pack2x16snorm`.
+    pub tangent: u32,
+    /// Linear RGB colour (RGBA8; bit 0 of alpha: `+v` runs along `−(n × t)`).
+    pub color: u32,
+    /// Ambient occlusion at the `uv` box corners (min,min), (max,min), (min,max), (max,max).
+    pub ao: u32,
+}
+
+/// A plane as the shader reads it (80 bytes).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
+pub struct PlaneRecord {
+    /// Origin (xyz) and cell size in metres (w).
+    pub origin_cell: [f32; 4],
+    /// `u` axis (xyz), rectangle `min.s` (w).
+    pub u: [f32; 4],
+    /// `v` axis (xyz), rectangle `min.t` (w).
+    pub v: [f32; 4],
+    /// Normal (xyz), rectangle size along `u` (w).
+    pub n: [f32; 4],
+    /// Cells along `u`, along `v`, first cell, rectangle size along `v` (bits of an f32).
+    pub grid: [u32; 4],
+}
+
+impl PlaneRecord {
+    /// Rectangle minimum (plane coordinates).
+    pub fn min(&self) -> Vec2 {
+        Vec2::new(self.u[3], self.v[3])
+    }
+    /// Rectangle size.
+    pub fn size(&self) -> Vec2 {
+        Vec2::new(self.n[3], f32::from_bits(self.grid[3]))
+    }
+    /// Cells along `u` and `v`.
+    pub fn cells(&self) -> (u32, u32) {
+        (self.grid[0], self.grid[1])
+    }
+    /// The cell holding plane point `st` (clamped into the grid).
+    pub fn cell_of(&self, st: Vec2) -> (u32, u32) {
+        let c = ((st - self.min()) / self.origin_cell[3]).floor();
+        let (nx, ny) = self.cells();
+        (
+            (c.x.max(0.0) as u32).min(nx - 1),
+            (c.y.max(0.0) as u32).min(ny - 1),
+        )
+    }
+    /// Plane coordinates of a model-space point.
+    pub fn project(&self, p: Vec3) -> Vec2 {
+        let d = p - Vec3::from_slice(&self.origin_cell[..3]);
+        Vec2::new(
+            d.dot(Vec3::from_slice(&self.u[..3])),
+            d.dot(Vec3::from_slice(&self.v[..3])),
+        )
+    }
+}
+
+/// One cloud (one geometric level): its planes, hash cells, lists, leaf records and
+/// low-resolution tiles.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Cloud {
+    /// The planes.
+    pub planes: Vec<PlaneRecord>,
+    /// Each plane's leaves (leaf numbers), as clustered.
+    pub members: Vec<Vec<u32>>,
+    /// Hash cells of every plane in turn: `start << 8 | length` (0: empty).
+    pub cells: Vec<u32>,
+    /// List entries: record numbers.
+    pub lists: Vec<u32>,
+    /// One record per leaf, by leaf number.
+    pub records: Vec<LeafRecord>,
+    /// Low-resolution tile size.
+    pub tile: u32,
+    /// Per plane two mip chains: seen from the front side, then from the back side.
+    pub lowres: Vec<Vec<TileLevel>>,
+    /// Whether the shader walks this cloud's lists (the farthest cloud keeps only its
+    /// low-resolution tiles: `cells`, `lists` and `records` are empty).
+    pub layered: bool,
+}
+
+impl Cloud {
+    /// GPU bytes of this cloud's buffers and tiles (all mips).
+    pub fn bytes(&self) -> u64 {
+        let tiles: u64 = self
+            .lowres
+            .iter()
+            .flat_map(|c| c.iter())
+            .map(|l| (l.color.len() + l.normal.len()) as u64)
+            .sum();
+        (self.planes.len() * std::mem::size_of::<PlaneRecord>()
+            + self.cells.len() * 4
+            + self.lists.len() * 4
+            + self.records.len() * std::mem::size_of::<LeafRecord>()) as u64
+            + tiles
+    }
+
+    /// The cell list of `(plane, cx, cy)`: record numbers, front to back.
+    pub fn list(&self, plane: usize, cx: u32, cy: u32) -> &[u32] {
+        let p = &self.planes[plane];
+        let (nx, _) = p.cells();
+        let c = self.cells[(p.grid[2] + cy * nx + cx) as usize];
+        let (start, len) = ((c >> 8) as usize, (c & 255) as usize);
+        &self.lists[start..start + len]
+    }
+}
+
+/// Octahedral encoding of a unit vector into `pack2x16snorm`.
+pub fn oct_encode(n: Vec3) -> u32 {
+    let n = n / (n.x.abs() + n.y.abs() + n.z.abs()).max(1e-20);
+    let p = if n.z >= 0.0 {
+        Vec2::new(n.x, n.y)
+    } else {
+        let s = Vec2::new(n.x.signum(), n.y.signum());
+        (Vec2::ONE - Vec2::new(n.y.abs(), n.x.abs())) * s
+    };
+    let q = |x: f32| ((x.clamp(-1.0, 1.0) * 32767.0).round() as i16) as u16 as u32;
+    q(p.x) | (q(p.y) << 16)
+}
+
+/// The inverse of [`oct_encode`].
+pub fn oct_decode(v: u32) -> Vec3 {
+    let f = |b: u32| ((b & 0xffff) as u16 as i16) as f32 / 32767.0;
+    let (x, y) = (f(v).max(-1.0), f(v >> 16).max(-1.0));
+    let z = 1.0 - x.abs() - y.abs();
+    let t = (-z).max(0.0);
+    Vec3::new(
+        x + if x >= 0.0 { -t } else { t },
+        y + if y >= 0.0 { -t } else { t },
+        z,
+    )
+    .normalize_or(Vec3::Z)
+}
+
+fn pack_unorm2(v: Vec2) -> u32 {
+    let q = |x: f32| (x.clamp(0.0, 1.0) * 65535.0).round() as u32;
+    q(v.x) | (q(v.y) << 16)
+}
+
+/// `pack2x16unorm`'s inverse.
+pub fn unpack_unorm2(v: u32) -> Vec2 {
+    Vec2::new((v & 0xffff) as f32, (v >> 16) as f32) / 65535.0
+}
+
+/// The reference's crown occlusion (`crown_occlusion` in `shaders/frame.wgsl`).
+pub fn crown_occlusion(p: Vec3, min: Vec3, max: Vec3) -> f32 {
+    let centre = (min + max) * 0.5;
+    let half = ((max - min) * 0.5).max(Vec3::splat(1e-3));
+    let q = (p - centre) / half;
+    let radial = Vec2::new(q.x, q.z).length().clamp(0.0, 1.0);
+    let height = ((p.y - min.y) / (2.0 * half.y)).clamp(0.0, 1.0);
+    (0.35 + 0.45 * radial + 0.3 * height).clamp(0.0, 1.0)
+}
+
+/// Solves the 3×3 system `a x = b` (Cramer); `None` when singular.
+fn solve3(a: [[f32; 3]; 3], b: [f32; 3]) -> Option<[f32; 3]> {
+    let m = glam::Mat3::from_cols_array_2d(&a).transpose();
+    let det = m.determinant();
+    if det.abs() < 1e-20 {
+        return None;
+    }
+    Some((m.inverse() * Vec3::from(b)).to_array())
+}
+
+/// Least-squares `f(x, y) = a x + b y + c` through the samples (with a tiny ridge so a line of
+/// samples still solves, flat across it).
+fn fit_affine(samples: &[(Vec2, f32)]) -> [f32; 3] {
+    let mut a = [[0.0f32; 3]; 3];
+    let mut b = [0.0f32; 3];
+    for &(p, f) in samples {
+        let r = [p.x, p.y, 1.0];
+        for i in 0..3 {
+            for j in 0..3 {
+                a[i][j] += r[i] * r[j];
+            }
+            b[i] += r[i] * f;
+        }
+    }
+    let ridge = 1e-9 * (a[0][0] + a[1][1] + a[2][2]).max(1e-12);
+    for (i, row) in a.iter_mut().enumerate() {
+        row[i] += ridge;
+    }
+    solve3(a, b).unwrap_or([0.0, 0.0, b[2] / samples.len().max(1) as f32])
+}
+
+/// Least-squares bilinear corner values through samples at box coordinates in `[0, 1]²`
+/// (fig. 11), ridge-regularised towards the samples' mean so 1–3 vertices still solve.
+fn fit_bilinear(samples: &[(Vec2, f32)]) -> [f32; 4] {
+    let mean = samples.iter().map(|s| s.1).sum::<f32>() / samples.len().max(1) as f32;
+    let mut a = glam::Mat4::ZERO;
+    let mut b = glam::Vec4::ZERO;
+    for &(p, f) in samples {
+        let r = glam::Vec4::new(
+            (1.0 - p.x) * (1.0 - p.y),
+            p.x * (1.0 - p.y),
+            (1.0 - p.x) * p.y,
+            p.x * p.y,
+        );
+        for i in 0..4 {
+            *a.col_mut(i) += r * r[i];
+        }
+        b += r * f;
+    }
+    let ridge = 1e-3;
+    for i in 0..4 {
+        a.col_mut(i)[i] += ridge;
+        b[i] += ridge * mean;
+    }
+    if a.determinant().abs() < 1e-12 {
+        return [mean; 4];
+    }
+    (a.inverse() * b).to_array().map(|x| x.clamp(0.0, 1.0))
+}
+
+/// The record of `leaf` on `plane`.
+fn record(plant: &Plant, leaf: &Leaf, plane: &Plane) -> LeafRecord {
+    let m = &plant.leaves;
+    let (bmin, bmax) = (Vec3::from(plant.bbox_min), Vec3::from(plant.bbox_max));
+    let mut uv_min = Vec2::splat(f32::MAX);
+    let mut uv_max = Vec2::splat(f32::MIN);
+    let mut sx = Vec::with_capacity(leaf.vertices.len());
+    let mut sy = Vec::with_capacity(leaf.vertices.len());
+    let mut px = [Vec::new(), Vec::new(), Vec::new()];
+    let mut color = Vec3::ZERO;
+    for &i in &leaf.vertices {
+        let uv = Vec2::from(m.uvs[i as usize]);
+        let p = Vec3::from(m.positions[i as usize]);
+        let st = plane.leaf_st(leaf, p);
+        uv_min = uv_min.min(uv);
+        uv_max = uv_max.max(uv);
+        sx.push((uv, st.x));
+        sy.push((uv, st.y));
+        for (k, list) in px.iter_mut().enumerate() {
+            list.push((uv, p[k]));
+        }
+        color += Vec3::from(m.colors[i as usize]);
+    }
+    color /= leaf.vertices.len() as f32;
+    // st = P uv + q, least squares; the record holds P⁻¹ and q.
+    let [a, b, qx] = fit_affine(&sx);
+    let [c, d, qy] = fit_affine(&sy);
+    let p = glam::Mat2::from_cols(Vec2::new(a, c), Vec2::new(b, d));
+    let inv = if p.determinant().abs() > 1e-12 {
+        p.inverse()
+    } else {
+        // Edge-on to its plane: it covers no area there.
+        glam::Mat2::ZERO
+    };
+    // The leaf's frame: +u and +v directions in model space.
+    let fit3: Vec<[f32; 3]> = px.iter().map(|l| fit_affine(l)).collect();
+    let t = Vec3::new(fit3[0][0], fit3[1][0], fit3[2][0]);
+    let bv = Vec3::new(fit3[0][1], fit3[1][1], fit3[2][1]);
+    let n = leaf.normal;
+    let t = (t - n * t.dot(n)).normalize_or(n.any_orthonormal_vector());
+    let flip = n.cross(t).dot(bv) < 0.0;
+    let ao_samples: Vec<(Vec2, f32)> = leaf
+        .vertices
+        .iter()
+        .map(|&i| {
+            let uv = Vec2::from(m.uvs[i as usize]);
+            let q = (uv - uv_min) / (uv_max - uv_min).max(Vec2::splat(1e-6));
+            let pos = Vec3::from(m.positions[i as usize]);
+            (q, crown_occlusion(pos, bmin, bmax))
+        })
+        .collect();
+    let ao = fit_bilinear(&ao_samples);
+    let c8 = |x: f32| (x.clamp(0.0, 1.0) * 255.0).round() as u32;
+    LeafRecord {
+        origin: [qx, qy],
+        inv: inv.to_cols_array(),
+        uv_box: [pack_unorm2(uv_min), pack_unorm2(uv_max)],
+        normal: oct_encode(n),
+        tangent: oct_encode(t),
+        color: c8(color.x) | (c8(color.y) << 8) | (c8(color.z) << 16) | ((flip as u32) << 24),
+        ao: c8(ao[0]) | (c8(ao[1]) << 8) | (c8(ao[2]) << 16) | (c8(ao[3]) << 24),
+    }
+}
+
+/// Whether triangle `t` (2D) overlaps the box `[lo, hi]` (separating axes: the box's two and
+/// the triangle's three edge normals). Touching counts as overlapping.
+pub fn triangle_overlaps_box(t: [Vec2; 3], lo: Vec2, hi: Vec2) -> bool {
+    let tmin = t[0].min(t[1]).min(t[2]);
+    let tmax = t[0].max(t[1]).max(t[2]);
+    if tmax.x < lo.x || tmin.x > hi.x || tmax.y < lo.y || tmin.y > hi.y {
+        return false;
+    }
+    let corners = [lo, Vec2::new(hi.x, lo.y), hi, Vec2::new(lo.x, hi.y)];
+    for i in 0..3 {
+        let e = t[(i + 1) % 3] - t[i];
+        let axis = Vec2::new(-e.y, e.x);
+        let tri: [f32; 3] = t.map(|p| p.dot(axis));
+        let (a0, a1) = (
+            tri.iter().copied().fold(f32::MAX, f32::min),
+            tri.iter().copied().fold(f32::MIN, f32::max),
+        );
+        let bx = corners.map(|p| p.dot(axis));
+        let (b0, b1) = (
+            bx.iter().copied().fold(f32::MAX, f32::min),
+            bx.iter().copied().fold(f32::MIN, f32::max),
+        );
+        if a1 < b0 || b1 < a0 {
+            return false;
+        }
+    }
+    true
+}
+
+/// Bilinear RGBA of an RGBA8 image at `uv` (clamped; rows top to bottom), channels in [0, 1].
+fn sample(tex: &LeafTexture, uv: Vec2) -> [f32; 4] {
+    if tex.width == 0 || tex.height == 0 {
+        return [1.0; 4];
+    }
+    let (w, h) = (tex.width as i64, tex.height as i64);
+    let x = uv.x * w as f32 - 0.5;
+    let y = uv.y * h as f32 - 0.5;
+    let (x0, y0) = (x.floor(), y.floor());
+    let (fx, fy) = (x - x0, y - y0);
+    let at = |xi: i64, yi: i64| {
+        let (xi, yi) = (xi.clamp(0, w - 1), yi.clamp(0, h - 1));
+        let i = ((yi * w + xi) * 4) as usize;
+        [0, 1, 2, 3].map(|k| tex.rgba[i + k] as f32 / 255.0)
+    };
+    let (x0, y0) = (x0 as i64, y0 as i64);
+    let (a, b, c, d) = (
+        at(x0, y0),
+        at(x0 + 1, y0),
+        at(x0, y0 + 1),
+        at(x0 + 1, y0 + 1),
+    );
+    [0, 1, 2, 3].map(|k| {
+        (a[k] * (1.0 - fx) + b[k] * fx) * (1.0 - fy) + (c[k] * (1.0 - fx) + d[k] * fx) * fy
+    })
+}
+
+fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// What one plane point shows from one side: the first opaque leaf of its cell's list.
+pub struct Hit {
+    /// Record number.
+    pub record: u32,
+    /// The leaf image coordinates there.
+    pub uv: Vec2,
+}
+
+/// The leaf image coordinates of plane point `st` on `rec`, if inside its box.
+pub fn leaf_uv(rec: &LeafRecord, st: Vec2) -> Option<Vec2> {
+    let inv = glam::Mat2::from_cols_array(&rec.inv);
+    let uv = inv * (st - Vec2::from(rec.origin));
+    let (lo, hi) = (unpack_unorm2(rec.uv_box[0]), unpack_unorm2(rec.uv_box[1]));
+    (uv.cmpge(lo).all() && uv.cmple(hi).all() && inv != glam::Mat2::ZERO).then_some(uv)
+}
+
+/// The CPU twin of the fragment shader's walk (§5, fig. 7): the first entry of the cell's
+/// list whose leaf image is opaque at `st` (alpha ≥ 0.5), from the front (`front`) or from the
+/// back end of the list.
+pub fn walk(cloud: &Cloud, plant: &Plant, plane: usize, st: Vec2, front: bool) -> Option<Hit> {
+    let p = &cloud.planes[plane];
+    let (cx, cy) = p.cell_of(st);
+    let list = cloud.list(plane, cx, cy);
+    let mut visit = |&r: &u32| {
+        let rec = &cloud.records[r as usize];
+        let uv = leaf_uv(rec, st)?;
+        (sample(&plant.leaf_texture, uv)[3] >= 0.5).then_some(Hit { record: r, uv })
+    };
+    if front {
+        list.iter().find_map(&mut visit)
+    } else {
+        list.iter().rev().find_map(&mut visit)
+    }
+}
+
+/// How one cloud is laid out.
+#[derive(Debug, Clone, Copy)]
+pub struct CloudSpec {
+    /// Hash cells over all planes (the cell size follows).
+    pub cells: u32,
+    /// Low-resolution tile size (a power of two).
+    pub tile: u32,
+    /// Low-resolution samples per texel per axis.
+    pub supersample: u32,
+    /// Keep the lists for the shader (else only the low-resolution tiles).
+    pub layered: bool,
+}
+
+/// Builds one cloud from clustered planes.
+pub fn build(
+    plant: &Plant,
+    leaves: &[Leaf],
+    planes: &[Plane],
+    spec: CloudSpec,
+) -> Result<Cloud, String> {
+    let m = &plant.leaves;
+    let area: f32 = planes
+        .iter()
+        .map(|p| (p.max - p.min).x * (p.max - p.min).y)
+        .sum();
+    let cell_m = (area / spec.cells.max(1) as f32).sqrt().max(1e-5);
+    let mut records = vec![LeafRecord::zeroed(); leaves.len()];
+    let mut out_planes = Vec::with_capacity(planes.len());
+    let mut cells: Vec<u32> = Vec::new();
+    let mut lists: Vec<u32> = Vec::new();
+    let mut members = Vec::with_capacity(planes.len());
+    for plane in planes {
+        let size = plane.max - plane.min;
+        let cm = cell_m
+            .max(size.x / MAX_CELLS_PER_SIDE as f32)
+            .max(size.y / MAX_CELLS_PER_SIDE as f32);
+        let nx = ((size.x / cm).ceil() as u32).clamp(1, MAX_CELLS_PER_SIDE);
+        let ny = ((size.y / cm).ceil() as u32).clamp(1, MAX_CELLS_PER_SIDE);
+        let rec = PlaneRecord {
+            origin_cell: plane.origin.extend(cm).to_array(),
+            u: plane.u.extend(plane.min.x).to_array(),
+            v: plane.v.extend(plane.min.y).to_array(),
+            n: plane.normal.extend(size.x).to_array(),
+            grid: [nx, ny, cells.len() as u32, size.y.to_bits()],
+        };
+        // Per cell: (height at the centre, record).
+        let mut per_cell: Vec<Vec<(f32, u32)>> = vec![Vec::new(); (nx * ny) as usize];
+        let mut touched: Vec<u32> = Vec::new();
+        for &l in &plane.leaves {
+            let leaf = &leaves[l as usize];
+            records[l as usize] = record(plant, leaf, plane);
+            // Sorted by the height of the leaf's centre above the plane.
+            let height = plane.height(leaf.centre);
+            touched.clear();
+            let tris = &m.indices[leaf.indices.start as usize..leaf.indices.end as usize];
+            for t in tris.chunks_exact(3) {
+                let tri = [t[0], t[1], t[2]]
+                    .map(|i| plane.leaf_st(leaf, Vec3::from(m.positions[i as usize])));
+                let lo = (tri[0].min(tri[1]).min(tri[2]) - plane.min) / cm;
+                let hi = (tri[0].max(tri[1]).max(tri[2]) - plane.min) / cm;
+                let (x0, y0) = (lo.x.floor().max(0.0) as u32, lo.y.floor().max(0.0) as u32);
+                let x1 = (hi.x.floor().max(0.0) as u32).min(nx - 1);
+                let y1 = (hi.y.floor().max(0.0) as u32).min(ny - 1);
+                for cy in y0..=y1 {
+                    for cx in x0..=x1 {
+                        let clo = plane.min + Vec2::new(cx as f32, cy as f32) * cm;
+                        if triangle_overlaps_box(tri, clo, clo + Vec2::splat(cm)) {
+                            touched.push(cy * nx + cx);
+                        }
+                    }
+                }
+            }
+            touched.sort_unstable();
+            touched.dedup();
+            for &c in &touched {
+                per_cell[c as usize].push((height, l));
+            }
+        }
+        for list in &mut per_cell {
+            // Front (highest above the plane) first; ties by leaf number, so the order is total.
+            list.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+            list.truncate(MAX_LIST);
+            if list.is_empty() {
+                cells.push(0);
+                continue;
+            }
+            if lists.len() + list.len() > MAX_ENTRIES {
+                return Err(format!(
+                    "{}: more than {MAX_ENTRIES} leaf fragments in one cloud — lower billboard-cloud cells",
+                    plant.name
+                ));
+            }
+            cells.push(((lists.len() as u32) << 8) | list.len() as u32);
+            lists.extend(list.iter().map(|x| x.1));
+        }
+        out_planes.push(rec);
+        members.push(plane.leaves.clone());
+    }
+    let mut cloud = Cloud {
+        planes: out_planes,
+        members,
+        cells,
+        lists,
+        records,
+        tile: spec.tile,
+        lowres: Vec::new(),
+        layered: spec.layered,
+    };
+    cloud.lowres = (0..cloud.planes.len())
+        .flat_map(|p| [true, false].map(|front| (p, front)))
+        .map(|(p, front)| lowres_tile(&cloud, plant, p, front, spec).levels())
+        .collect();
+    if !spec.layered {
+        cloud.cells.clear();
+        cloud.lists.clear();
+        cloud.records.clear();
+    }
+    Ok(cloud)
+}
+
+/// The low-resolution tile of `plane` seen from its front (`front`) or back side: at each of
+/// `supersample²` points per texel the list walk's first opaque leaf, its albedo (front or
+/// back image, times the leaf's colour), its bent normal turned towards the side seen and its
+/// interpolated occlusion.
+fn lowres_tile(
+    cloud: &Cloud,
+    plant: &Plant,
+    plane: usize,
+    front: bool,
+    spec: CloudSpec,
+) -> TileImage {
+    let p = &cloud.planes[plane];
+    let n_plane = Vec3::from_slice(&p.n[..3]) * if front { 1.0 } else { -1.0 };
+    let (size, ss) = (spec.tile as usize, spec.supersample.max(1) as usize);
+    let inv = 1.0 / (ss * ss) as f32;
+    let mut color = vec![[0.0f32; 4]; size * size];
+    let mut normal_depth = vec![[0.0f32; 4]; size * size];
+    let (min, ext) = (p.min(), p.size());
+    let back_tex = if plant.leaf_back.width > 0 {
+        &plant.leaf_back
+    } else {
+        &plant.leaf_texture
+    };
+    for y in 0..size {
+        for x in 0..size {
+            let (mut c, mut nd, mut hits) = ([0.0f32; 4], Vec3::ZERO, 0.0f32);
+            let mut ao_sum = 0.0;
+            for sy in 0..ss {
+                for sx in 0..ss {
+                    let f = Vec2::new(
+                        (x as f32 + (sx as f32 + 0.5) / ss as f32) / size as f32,
+                        (y as f32 + (sy as f32 + 0.5) / ss as f32) / size as f32,
+                    );
+                    let st = min + f * ext;
+                    let Some(hit) = walk(cloud, plant, plane, st, front) else {
+                        continue;
+                    };
+                    let rec = &cloud.records[hit.record as usize];
+                    let (s, albedo, ao) = shade(rec, plant, back_tex, hit.uv, n_plane);
+                    for k in 0..3 {
+                        c[k] += albedo[k];
+                    }
+                    c[3] += 1.0;
+                    nd += s;
+                    ao_sum += ao;
+                    hits += 1.0;
+                }
+            }
+            color[y * size + x] = c.map(|v| v * inv);
+            if hits > 0.0 {
+                let n = nd.normalize_or(n_plane);
+                normal_depth[y * size + x] = [n.x, n.y, n.z, ao_sum / hits];
+            }
+        }
+    }
+    TileImage {
+        size: spec.tile,
+        color,
+        normal_depth,
+    }
+}
+
+/// A leaf texel's bent normal facing `toward`, its linear albedo (premultiplied by 1) and
+/// its occlusion, as the fragment shader computes them.
+fn shade(
+    rec: &LeafRecord,
+    plant: &Plant,
+    back_tex: &LeafTexture,
+    uv: Vec2,
+    toward: Vec3,
+) -> (Vec3, [f32; 3], f32) {
+    let n = oct_decode(rec.normal);
+    let t = oct_decode(rec.tangent);
+    let flip = (rec.color >> 24) & 1 == 1;
+    let b = n.cross(t) * if flip { -1.0 } else { 1.0 };
+    let bump = if plant.leaf_normal.width > 0 {
+        let m = sample(&plant.leaf_normal, uv);
+        Vec3::new(m[0], m[1], m[2]) * 2.0 - Vec3::ONE
+    } else {
+        Vec3::Z
+    };
+    let bent = (t * bump.x + b * bump.y + n * bump.z).normalize_or(n);
+    let seen_front = n.dot(toward) >= 0.0;
+    let tex = sample(
+        if seen_front {
+            &plant.leaf_texture
+        } else {
+            back_tex
+        },
+        uv,
+    );
+    let col = [
+        (rec.color & 255) as f32 / 255.0,
+        ((rec.color >> 8) & 255) as f32 / 255.0,
+        ((rec.color >> 16) & 255) as f32 / 255.0,
+    ];
+    let albedo = [0, 1, 2].map(|k| srgb_to_linear(tex[k]) * col[k]);
+    let (lo, hi) = (unpack_unorm2(rec.uv_box[0]), unpack_unorm2(rec.uv_box[1]));
+    let q = ((uv - lo) / (hi - lo).max(Vec2::splat(1e-6))).clamp(Vec2::ZERO, Vec2::ONE);
+    let a = [0, 8, 16, 24].map(|s| ((rec.ao >> s) & 255) as f32 / 255.0);
+    let ao =
+        (a[0] * (1.0 - q.x) + a[1] * q.x) * (1.0 - q.y) + (a[2] * (1.0 - q.x) + a[3] * q.x) * q.y;
+    let s = if seen_front { bent } else { -bent };
+    (s, albedo, ao)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn octahedral_normals_round_trip() {
+        for d in [
+            Vec3::X,
+            -Vec3::Y,
+            Vec3::new(0.3, -0.8, 0.52).normalize(),
+            Vec3::new(-0.7, 0.1, -0.7).normalize(),
+        ] {
+            assert!(oct_decode(oct_encode(d)).dot(d) > 0.9999, "{d:?}");
+        }
+    }
+
+    #[test]
+    fn separating_axes() {
+        let t = [Vec2::ZERO, Vec2::new(1.0, 0.0), Vec2::new(0.0, 1.0)];
+        assert!(triangle_overlaps_box(t, Vec2::splat(0.2), Vec2::splat(0.3)));
+        // Beyond the hypotenuse, inside the bounding box.
+        assert!(!triangle_overlaps_box(
+            t,
+            Vec2::splat(0.6),
+            Vec2::splat(0.9)
+        ));
+        assert!(!triangle_overlaps_box(
+            t,
+            Vec2::splat(1.1),
+            Vec2::splat(2.0)
+        ));
+    }
+
+    #[test]
+    fn bilinear_fit_is_exact_on_corners() {
+        let s = [
+            (Vec2::new(0.0, 0.0), 0.1),
+            (Vec2::new(1.0, 0.0), 0.4),
+            (Vec2::new(0.0, 1.0), 0.6),
+            (Vec2::new(1.0, 1.0), 0.9),
+        ];
+        let c = fit_bilinear(&s);
+        for (got, want) in c.iter().zip([0.1, 0.4, 0.6, 0.9]) {
+            assert!((got - want).abs() < 0.01, "{c:?}");
+        }
+    }
+}
