@@ -25,13 +25,19 @@
 //! recomputes exact weights, so the table's resolution never shows as blending error and the
 //! table and [`DirectionSet::nearest3`] agree exactly. The blend samples are the enclosing cell's,
 //! which are not always the 3 angularly nearest samples (see the tests for what holds).
+//!
+//! **Hemisphere grid (BN12 §5).** [`HemiGrid`]: the hemi-octahedral diamond grid of
+//! `2(n² + n) + 1` directions over the upper hemisphere (181 at `n = 9`, BN12's count) with an
+//! analytic 3-view lookup ([`HEMI_GRID_WGSL`] for shaders), used by `zfield`.
 
+mod hemi;
 mod lut;
 mod set;
 #[cfg(test)]
 mod tests;
 mod wgsl;
 
+pub use hemi::{HEMI_GRID_WGSL, HemiGrid};
 pub use lut::{DirectionLut, GpuDirTexel};
 pub use set::{DirectionSet, GpuDirFace, GpuDirSample};
 pub use wgsl::DIRECTIONS_WGSL;

@@ -463,7 +463,7 @@ mod tests {
             &["geometry:10-"],
             &["geometry:0-60"],
             &["geometry 0-60"],
-            &["zfield:0-"],
+            &["shadermap:0-"],
             &["nope:0-"],
             &["geometry:0-x"],
         ] {

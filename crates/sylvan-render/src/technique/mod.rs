@@ -15,9 +15,11 @@
 //! | `hbt` | [`hbt`] | MNP01 |
 //! | `billboard-cloud` | [`bcloud`] | GPSS07 |
 //! | `octahedral` | [`octahedral`] | industry baseline: hemi-octahedral impostor |
+//! | `zfield` | [`zfield`] | BN12 §5, §8: z-fields, sun/sky lighting, per-tree coverage masks |
 //! | `auto` | [`lod`] | the LOD chain: a technique per distance band, cross-faded |
 //!
-//! GPU-driven techniques (`Entry::gpu_driven`: `geometry`, `octahedral`, a chain of those)
+//! GPU-driven techniques (`Entry::gpu_driven`: `geometry`, `octahedral`, `billboard-cloud`,
+//! `zfield`, a chain of those)
 //! draw the tiled world from [`DrawContext::culled`] ([`crate::world`]); the others get every
 //! tree on the CPU in [`FrameInput::instances`].
 //!
@@ -32,6 +34,7 @@ pub mod lod;
 pub mod octahedral;
 pub mod params;
 pub mod registry;
+pub mod zfield;
 
 use crate::RenderError;
 use crate::bake::{BakeReport, CachePolicy};

@@ -90,6 +90,7 @@ pub static REGISTRY: &[Entry] = &[
     super::hbt::ENTRY,
     super::octahedral::ENTRY,
     super::bcloud::ENTRY,
+    super::zfield::ENTRY,
     super::lod::ENTRY,
 ];
 

@@ -1,0 +1,381 @@
+//! The GPU side of `zfield`: the three atlases (albedo, normal, z-field) and the grid's view
+//! frames uploaded once, the per-frame instance list (CPU-driven frames only), and the passes.
+
+use super::bake::ZFieldBaked;
+use super::{ZFieldBakeParams, ZFieldDrawParams};
+use crate::RenderError;
+use crate::directions::HemiGrid;
+use crate::frame::{CASCADES, FrameResources};
+use crate::instances::GpuTreeInstance;
+use crate::pipeline::{self, PassKind, PipelineSpec};
+use crate::technique::common::{self, Growable, TileAtlas};
+use crate::technique::geometry::LEAF_TRANSLUCENCY;
+use crate::technique::{DrawContext, DrawCounts, FrameInput, Technique};
+use crate::world::{IndirectDraw, ListLayout};
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use std::ops::Range;
+use sylvan_gpu::{Gpu, layout};
+use sylvan_plant::Plant;
+use wgpu::util::DeviceExt;
+
+const PASSES: usize = 1 + CASCADES;
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuZSpecies {
+    centre_radius: [f32; 4],
+    bbox_min: [f32; 4],
+    bbox_max: [f32; 4],
+    info: [u32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuZView {
+    u: [f32; 4],
+    v: [f32; 4],
+    f: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuZParams {
+    tiles: [u32; 4],
+    atlas: [f32; 4],
+    sun: [f32; 4],
+    sky: [f32; 4],
+    extra: [f32; 4],
+}
+
+/// The prepared z-field technique.
+pub struct ZField {
+    pipeline: wgpu::RenderPipeline,
+    shadow_pipeline: wgpu::RenderPipeline,
+    bind: wgpu::BindGroup,
+    static_bytes: u64,
+    /// Per species: the model-space centre of its frames (the back-to-front sort of `blend`).
+    centres: Vec<Vec3>,
+    blend: bool,
+    // Per frame, CPU-driven frames only (reused; nothing is allocated once grown).
+    instances: Growable,
+    staging: Vec<GpuTreeInstance>,
+    sort: Vec<(f32, GpuTreeInstance)>,
+    ranges: [Range<u32>; PASSES],
+}
+
+/// The grid's view frames (image axes; shared by every species, whose frames differ only by
+/// centre and radius).
+fn view_frames(grid: HemiGrid) -> Vec<GpuZView> {
+    grid.directions()
+        .into_iter()
+        .map(|d| {
+            let f = crate::bake::views::PlaneFrame::for_sphere(d, Vec3::ZERO, 1.0);
+            GpuZView {
+                u: f.u.extend(0.0).to_array(),
+                v: f.v.extend(0.0).to_array(),
+                f: f.f.extend(0.0).to_array(),
+            }
+        })
+        .collect()
+}
+
+impl ZField {
+    /// Uploads every species' views into the atlases and builds the pipelines.
+    /// `density` is the tree density Λ_h of eq. 9 (trees per m²).
+    pub fn new(
+        gpu: &Gpu,
+        frame: &FrameResources,
+        plants: &[Plant],
+        baked: &[ZFieldBaked],
+        bake: &ZFieldBakeParams,
+        draw: &ZFieldDrawParams,
+        density: f32,
+    ) -> Result<Self, RenderError> {
+        let (order, tile) = (bake.order, bake.tile);
+        let grid = HemiGrid::new(order)
+            .ok_or_else(|| RenderError::Option(format!("zfield order {order}")))?;
+        if baked.len() != plants.len() {
+            return Err(RenderError::Plant(format!(
+                "{} zfield bakes for {} plants",
+                baked.len(),
+                plants.len()
+            )));
+        }
+        let mut species = Vec::with_capacity(plants.len());
+        let (mut color, mut normal, mut zfield) = (Vec::new(), Vec::new(), Vec::new());
+        for (plant, b) in plants.iter().zip(baked) {
+            if b.order != order || b.tile != tile || b.views.len() != grid.len() {
+                return Err(RenderError::Plant(format!(
+                    "{}: zfield bake has order {} tile {}, the parameters order {order} tile {tile} — re-bake",
+                    plant.name, b.order, b.tile
+                )));
+            }
+            species.push(GpuZSpecies {
+                centre_radius: Vec3::from(b.centre).extend(b.radius).to_array(),
+                bbox_min: Vec3::from(plant.bbox_min).extend(0.0).to_array(),
+                bbox_max: Vec3::from(plant.bbox_max).extend(0.0).to_array(),
+                info: [color.len() as u32, 0, 0, 0],
+            });
+            for v in &b.views {
+                color.push(v.levels.iter().map(|l| l.color.clone()).collect::<Vec<_>>());
+                normal.push(
+                    v.levels
+                        .iter()
+                        .map(|l| l.normal.clone())
+                        .collect::<Vec<_>>(),
+                );
+                zfield.push(v.zfield.clone());
+            }
+        }
+        let upload = |label, format, data: &[Vec<Vec<u8>>]| {
+            let refs: Vec<&[Vec<u8>]> = data.iter().map(Vec::as_slice).collect();
+            TileAtlas::upload(gpu, label, format, tile, &refs)
+        };
+        let color = upload(
+            "zfield_atlas_color",
+            wgpu::TextureFormat::Rgba8UnormSrgb,
+            &color,
+        )?;
+        let normal = upload(
+            "zfield_atlas_normal",
+            wgpu::TextureFormat::Rgba8Unorm,
+            &normal,
+        )?;
+        let zfield = upload(
+            "zfield_atlas_zfield",
+            wgpu::TextureFormat::Rgba8Unorm,
+            &zfield,
+        )?;
+        let params = GpuZParams {
+            tiles: [tile, color.per_row, color.per_layer, order],
+            atlas: [
+                1.0 / color.per_row as f32,
+                1.0 / color.rows as f32,
+                LEAF_TRANSLUCENCY,
+                if draw.opacity_scaled_tau { 1.0 } else { 0.0 },
+            ],
+            sun: [draw.tau, draw.sun_scale, draw.a1, draw.a2],
+            sky: [
+                draw.sky_scale,
+                density,
+                draw.normal_weight,
+                if draw.per_tree_masks { 1.0 } else { 0.0 },
+            ],
+            extra: [draw.lod_bias, 0.0, 0.0, 0.0],
+        };
+        let device = &gpu.device;
+        let storage = |label, contents: &[u8]| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage: wgpu::BufferUsages::STORAGE,
+            })
+        };
+        let species_buffer = storage("zfield_species", bytemuck::cast_slice(&species));
+        let view_buffer = storage("zfield_views", bytemuck::cast_slice(&view_frames(grid)));
+        let params_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("zfield_params"),
+            contents: bytemuck::bytes_of(&params),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let sampler = common::trilinear_sampler(gpu, "zfield_sampler");
+        let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
+        let bind_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("zfield_layout"),
+            entries: &[
+                layout::storage(0, vf),
+                layout::storage(1, vf),
+                layout::atlas(2),
+                layout::atlas(3),
+                layout::atlas(4),
+                layout::sampler(
+                    5,
+                    wgpu::ShaderStages::FRAGMENT,
+                    wgpu::SamplerBindingType::Filtering,
+                ),
+                layout::uniform(6, vf),
+            ],
+        });
+        let (cv, nv, zv) = (color.view(), normal.view(), zfield.view());
+        let bind = common::bind_group(
+            gpu,
+            "zfield_bind",
+            &bind_layout,
+            &[
+                species_buffer.as_entire_binding(),
+                view_buffer.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&cv),
+                wgpu::BindingResource::TextureView(&nv),
+                wgpu::BindingResource::TextureView(&zv),
+                wgpu::BindingResource::Sampler(&sampler),
+                params_buffer.as_entire_binding(),
+            ],
+        );
+        let module = sylvan_gpu::shader(gpu, "zfield", &super::shader_source());
+        let buffers = [None, Some(GpuTreeInstance::LAYOUT)];
+        let build = |label, vs, fs, pass, layouts: &[&wgpu::BindGroupLayout], blend| {
+            pipeline::build(
+                gpu,
+                &PipelineSpec {
+                    label,
+                    layouts,
+                    module: &module,
+                    vs,
+                    fs: Some(fs),
+                    buffers: &buffers,
+                    pass,
+                    cull: None,
+                    depth_write: true,
+                    blend,
+                },
+            )
+        };
+        // Opaque with per-tree coverage masks and p_v's depth: no sort, no blending; or
+        // (`blend`) premultiplied over, sorted back to front, p_v's depth still written.
+        let pipeline = if draw.blend {
+            build(
+                "zfield_blend",
+                "vs_zfield",
+                "fs_zfield_blend",
+                PassKind::Main,
+                &[&frame.main_layout, &bind_layout],
+                Some(common::PREMULTIPLIED_OVER),
+            )
+        } else {
+            build(
+                "zfield",
+                "vs_zfield",
+                "fs_zfield",
+                PassKind::Main,
+                &[&frame.main_layout, &bind_layout],
+                None,
+            )
+        };
+        let shadow_pipeline = build(
+            "zfield_shadow",
+            "vs_zfield_shadow",
+            "fs_zfield_shadow",
+            PassKind::Shadow,
+            &[&frame.shadow_layout, &bind_layout],
+            None,
+        );
+        let static_bytes = color.bytes
+            + normal.bytes
+            + zfield.bytes
+            + species_buffer.size()
+            + view_buffer.size()
+            + params_buffer.size();
+        Ok(Self {
+            pipeline,
+            shadow_pipeline,
+            bind,
+            static_bytes,
+            centres: baked.iter().map(|b| Vec3::from(b.centre)).collect(),
+            blend: draw.blend,
+            sort: Vec::new(),
+            instances: Growable::new(gpu, "zfield_instances", 1 << 16),
+            staging: Vec::new(),
+            ranges: std::array::from_fn(|_| 0..0),
+        })
+    }
+}
+
+impl Technique for ZField {
+    fn name(&self) -> &'static str {
+        super::ENTRY.name
+    }
+
+    /// CPU-driven frames: every culled tree's quad, one list per pass of all species (the
+    /// species in `rot.z`, as the GPU cull writes it). GPU-driven frames need nothing here.
+    fn prepare_frame(
+        &mut self,
+        gpu: &Gpu,
+        _: &mut wgpu::CommandEncoder,
+        input: &FrameInput<'_>,
+    ) -> Result<(), RenderError> {
+        self.staging.clear();
+        for pass in 0..PASSES {
+            self.sort.clear();
+            for (s, centre) in self.centres.iter().enumerate() {
+                for rec in input.instances.records(pass, s) {
+                    let [x, y, z, scale] = rec.base_scale;
+                    let (c, sn) = (rec.rot[0], rec.rot[1]);
+                    let q = *centre * scale;
+                    let world = Vec3::new(x + c * q.x + sn * q.z, y + q.y, z - sn * q.x + c * q.z);
+                    self.sort.push((
+                        world.distance_squared(input.eye),
+                        GpuTreeInstance {
+                            base_scale: rec.base_scale,
+                            rot: [rec.rot[0], rec.rot[1], s as f32 + rec.rot[2], rec.rot[3]],
+                        },
+                    ));
+                }
+            }
+            if pass == 0 && self.blend {
+                // Back to front: premultiplied "over" needs the far trees first.
+                self.sort.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
+            }
+            let start = self.staging.len() as u32;
+            self.staging.extend(self.sort.iter().map(|x| x.1));
+            self.ranges[pass] = start..self.staging.len() as u32;
+        }
+        self.instances
+            .write(gpu, bytemuck::cast_slice(&self.staging))
+    }
+
+    fn draw(&self, pass: &mut wgpu::RenderPass<'_>, ctx: &DrawContext<'_>) -> DrawCounts {
+        let pipeline = match ctx.shadow_cascade() {
+            None => &self.pipeline,
+            Some(_) => &self.shadow_pipeline,
+        };
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, ctx.frame_bind, &[]);
+        pass.set_bind_group(1, &self.bind, &[]);
+        if let Some(culled) = ctx.culled.first() {
+            let Some(instances) = culled.instances(ctx.pass, 0) else {
+                return DrawCounts::default();
+            };
+            pass.set_vertex_buffer(1, instances);
+            let (args, offset) = culled.args(ctx.pass, 0);
+            pass.draw_indirect(args, offset);
+            return DrawCounts {
+                draw_calls: 1,
+                triangles: culled.listed(ctx.pass, 0) as u64 * 2,
+            };
+        }
+        let r = self.ranges[ctx.pass].clone();
+        if r.is_empty() {
+            return DrawCounts::default();
+        }
+        pass.set_vertex_buffer(1, self.instances.buffer.slice(..));
+        let n = (r.end - r.start) as u64;
+        pass.draw(0..6, r);
+        DrawCounts {
+            draw_calls: 1,
+            triangles: n * 2,
+        }
+    }
+
+    fn bytes(&self) -> u64 {
+        self.static_bytes + self.instances.buffer.size()
+    }
+
+    /// Six vertices per tree from each pass's one list.
+    fn indirect_draws(&self) -> Vec<IndirectDraw> {
+        vec![IndirectDraw::vertices(0, 6)]
+    }
+
+    /// One list of every species per pass; with masks opaque, so unsorted; `blend` sorts the
+    /// camera's back to front.
+    fn list_layout(&self) -> ListLayout {
+        ListLayout {
+            per_species: false,
+            sort_camera: self.blend,
+        }
+    }
+
+    fn reallocations(&self) -> u32 {
+        self.instances.reallocations
+    }
+}

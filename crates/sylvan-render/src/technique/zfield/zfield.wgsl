@@ -1,0 +1,314 @@
+// Technique `zfield` (BN12 §5, fig. 4): one camera-facing proxy quad per tree; per pixel the
+// view ray's entry point p_v is reconstructed from the 3 grid views nearest the view
+// direction in two iterations, the light ray's entry point p_l in one, and the point is lit
+// with BN12's sun (eq. 7–8) and sky (eq. 9) terms. Fragment depth is p_v's. Coverage is a
+// per-tree stochastic mask (§8), so trees need no sorting.
+// Bind group 1: `bindings.wgsl`; the grid lookup: `directions::HEMI_GRID_WGSL`.
+
+struct ZIn {
+    @builtin(vertex_index) vertex: u32,
+};
+
+struct ZOut {
+    @builtin(position) pos: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    // The 3 views nearest the quad's direction (eye, or sun for casters) and the species.
+    @location(1) @interpolate(flat) views: vec4<u32>,
+    @location(2) @interpolate(flat) weights: vec3<f32>,
+    // The 3 views nearest the sun (camera pass).
+    @location(3) @interpolate(flat) light_views: vec4<u32>,
+    @location(4) @interpolate(flat) light_weights: vec3<f32>,
+    // Instance: trunk base and scale; cos, sin, tint seed, presence.
+    @location(5) @interpolate(flat) base_scale: vec4<f32>,
+    @location(6) @interpolate(flat) rot: vec4<f32>,
+    @location(7) @interpolate(flat) lod: f32,
+};
+
+fn hidden() -> ZOut {
+    var out: ZOut;
+    out.pos = vec4<f32>(0.0, 0.0, -2.0, 1.0);
+    return out;
+}
+
+// A world direction in the tree's frame, folded onto the upper hemisphere.
+fn model_dir_upper(a: vec3<f32>, rot: vec4<f32>) -> vec3<f32> {
+    var d = instance_dir_to_model(a, rot);
+    d.y = max(d.y, 0.0);
+    return select(vec3<f32>(0.0, 1.0, 0.0), normalize(d), dot(d, d) > 1e-12);
+}
+
+// The proxy quad of one tree facing `toward` (the eye, or the sun when `is_dir`): BN12 §5
+// step 1 (the 3 views and weights, per tree) and the quad covering the tree's box (its
+// bounding sphere's silhouette).
+fn z_vertex(in: ZIn, inst_in: TreeInstance, toward_world: vec3<f32>, is_dir: bool) -> ZOut {
+    // Every species is in one list: the instance's rot.z is species + tint seed.
+    let species = u32(floor(inst_in.rot.z));
+    var inst = inst_in;
+    inst.rot.z = fract(inst_in.rot.z);
+    let sp = z_species[species];
+    let centre = instance_to_world(sp.centre_radius.xyz, inst.base_scale, inst.rot);
+    let radius = sp.centre_radius.w * inst.base_scale.w;
+    var a = toward_world;
+    var grow = 1.0;
+    var dist = 0.0;
+    if (!is_dir) {
+        let e = toward_world - centre;
+        dist = length(e);
+        a = e / max(dist, 1e-6);
+        grow = min(dist / sqrt(max(dist * dist - radius * radius, 1e-6)), 4.0);
+        if (dist <= radius * 1.03) {
+            grow = 4.0;
+        }
+    }
+    let pick = hemi_grid_nearest3(model_dir_upper(a, inst.rot), zp.tiles.w);
+    let light = hemi_grid_nearest3(model_dir_upper(frame.sun_dir.xyz, inst.rot), zp.tiles.w);
+    let right = select(vec3<f32>(1.0, 0.0, 0.0), normalize(cross(vec3<f32>(0.0, 1.0, 0.0), a)), abs(a.y) < 0.9999);
+    let up = cross(a, right);
+    let st = array<vec2<f32>, 6>(
+        vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, -1.0), vec2<f32>(1.0, 1.0),
+        vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, 1.0), vec2<f32>(-1.0, 1.0),
+    )[in.vertex % 6u];
+    let world = centre + (right * st.x + up * st.y) * radius * grow;
+    var out: ZOut;
+    out.pos = frame.view_proj * vec4<f32>(world, 1.0);
+    out.world = world;
+    out.views = vec4<u32>(pick.views, species);
+    out.weights = pick.weights;
+    out.light_views = vec4<u32>(light.views, 0u);
+    out.light_weights = light.weights;
+    out.base_scale = inst.base_scale;
+    out.rot = inst.rot;
+    // A texel is 2·radius/tile metres; a pixel covers dist / pixels_per_metre (camera) or one
+    // shadow-map texel (sun).
+    let texel_m = 2.0 * radius / f32(zp.tiles.x);
+    var pixel_m = dist / max(frame.shadow_params.w, 1.0);
+    if (is_dir) {
+        let row_x = vec3<f32>(frame.view_proj[0].x, frame.view_proj[1].x, frame.view_proj[2].x);
+        pixel_m = frame.shadow_params.x * 2.0 / max(length(row_x), 1e-6);
+    }
+    // The camera pass samples `lod_bias` mips finer (sharper; measured closer to the
+    // reference on the default scene), casters at their texel footprint.
+    let bias = select(zp.extra.x, 0.0, is_dir);
+    out.lod = max(log2(pixel_m / texel_m) + bias, 0.0);
+    return out;
+}
+
+// Atlas coordinates of image point `uv` of `tile`, kept inside the tile at the coarser of the
+// two mips sampled. Explicit mips: llvmpipe's derivatives are wrong along triangle edges.
+fn atlas_uv(tile: u32, uv: vec2<f32>, lod: f32) -> vec3<f32> {
+    let in_layer = tile % zp.tiles.z;
+    let cell = vec2<f32>(f32(in_layer % zp.tiles.y), f32(in_layer / zp.tiles.y));
+    let half = 0.5 * exp2(ceil(lod)) / f32(zp.tiles.x);
+    let at = (cell + clamp(uv, vec2<f32>(half), vec2<f32>(1.0 - half))) * zp.atlas.xy;
+    return vec3<f32>(at, f32(tile / zp.tiles.z));
+}
+
+// Orthographic projection of model-space point `p` in view `k`: image coordinates, or
+// outside [0, 1]² where the view does not see it.
+fn view_uv(sp: ZSpecies, k: u32, p: vec3<f32>) -> vec2<f32> {
+    let view = z_views[k];
+    let q = (p - sp.centre_radius.xyz) / sp.centre_radius.w;
+    return vec2<f32>(0.5 + 0.5 * dot(q, view.u.xyz), 0.5 - 0.5 * dot(q, view.v.xyz));
+}
+
+fn inside(uv: vec2<f32>) -> bool {
+    return all(uv >= vec2<f32>(0.0)) && all(uv <= vec2<f32>(1.0));
+}
+
+// Σ wᵢ (α z, α z̄, α δ, α)ᵢ of `p` projected orthogonally in the 3 views (BN12 §5 step 3).
+fn zfield3(sp: ZSpecies, views: vec3<u32>, w: vec3<f32>, p: vec3<f32>, lod: f32) -> vec4<f32> {
+    var acc = vec4<f32>(0.0);
+    for (var i = 0u; i < 3u; i = i + 1u) {
+        if (w[i] <= 0.0) {
+            continue;
+        }
+        let uv = view_uv(sp, views[i], p);
+        if (!inside(uv)) {
+            continue;
+        }
+        let a = atlas_uv(sp.info.x + views[i], uv, lod);
+        acc = acc + w[i] * textureSampleLevel(atlas_zfield, atlas_sampler, a.xy, i32(a.z), lod);
+    }
+    return acc;
+}
+
+// Signed distance beyond the centre plane (model units) of a premultiplied depth.
+fn plane_distance(sp: ZSpecies, premultiplied_z: f32, alpha: f32) -> f32 {
+    return sp.centre_radius.w * (2.0 * premultiplied_z / alpha - 1.0);
+}
+
+struct Surface {
+    // Premultiplied albedo and coverage.
+    color: vec4<f32>,
+    // Coverage-weighted model-space normal (not normalised).
+    normal: vec3<f32>,
+};
+
+fn surface3(sp: ZSpecies, views: vec3<u32>, w: vec3<f32>, p: vec3<f32>, lod: f32) -> Surface {
+    var out: Surface;
+    out.color = vec4<f32>(0.0);
+    out.normal = vec3<f32>(0.0);
+    for (var i = 0u; i < 3u; i = i + 1u) {
+        if (w[i] <= 0.0) {
+            continue;
+        }
+        let uv = view_uv(sp, views[i], p);
+        if (!inside(uv)) {
+            continue;
+        }
+        let a = atlas_uv(sp.info.x + views[i], uv, lod);
+        let c = textureSampleLevel(atlas_color, atlas_sampler, a.xy, i32(a.z), lod);
+        let n = textureSampleLevel(atlas_normal, atlas_sampler, a.xy, i32(a.z), lod).xyz * 2.0 - 1.0;
+        out.color = out.color + w[i] * c;
+        out.normal = out.normal + (w[i] * c.a) * n;
+    }
+    return out;
+}
+
+// BN12 eq. 8: the empiric hotspot term, amplitude a1, width 1/a2; `v` towards the eye, `l`
+// towards the sun.
+fn hotspot(v: vec3<f32>, l: vec3<f32>) -> f32 {
+    let angle = acos(clamp(dot(v, l), -1.0, 1.0));
+    return 1.0 - zp.sun.z * (1.0 - exp(-zp.sun.w * angle));
+}
+
+// The per-tree coverage mask (BN12 §8): a pixel (supersample) is covered when the opacity
+// exceeds a threshold drawn per (pixel, tree), so n uncorrelated trees of opacity α cover
+// 1 − (1 − α)ⁿ; with shared masks (`per_tree_masks = false`, plain alpha to coverage) every
+// tree draws the same threshold and they cover α.
+fn mask_threshold(pixel: vec2<f32>, base_scale: vec4<f32>, seed: f32) -> f32 {
+    var key = 1.0;
+    if (zp.sky.w > 0.5) {
+        key = 2.0 + fract(seed * 7.31 + base_scale.x * 0.137 + base_scale.z * 0.291) * 4093.0;
+    }
+    return hash13(vec3<f32>(floor(pixel), key));
+}
+
+struct ZFragment {
+    @location(0) color: vec4<f32>,
+    @builtin(frag_depth) depth: f32,
+};
+
+@vertex
+fn vs_zfield(in: ZIn, inst: TreeInstance) -> ZOut {
+    return z_vertex(in, inst, frame.camera.xyz, false);
+}
+
+@fragment
+fn fs_zfield(in: ZOut) -> ZFragment {
+    return z_fragment(in, true);
+}
+
+// `blend`: premultiplied "over" in back-to-front order (the camera list sorted), p_v's depth
+// still written; no masks.
+@fragment
+fn fs_zfield_blend(in: ZOut) -> ZFragment {
+    return z_fragment(in, false);
+}
+
+fn z_fragment(in: ZOut, masked: bool) -> ZFragment {
+    let sp = z_species[in.views.w];
+    let c = sp.centre_radius.xyz;
+    // Step 2: p, where the view ray meets the plane through o facing the eye (the quad).
+    let p = instance_to_model(in.world, in.base_scale, in.rot);
+    let eye = instance_to_model(frame.camera.xyz, in.base_scale, in.rot);
+    let r = normalize(p - eye);
+    // Step 3, iteration 1.
+    let z1 = zfield3(sp, in.views.xyz, in.weights, p, in.lod);
+    if (z1.w < 0.004) {
+        discard;
+    }
+    let q = p + r * plane_distance(sp, z1.x, z1.w);
+    // Step 4, iteration 2: p_v, its opacity α_v and ambient occlusion δ_v.
+    let z2 = zfield3(sp, in.views.xyz, in.weights, q, in.lod);
+    let alpha_v = z2.w;
+    if (alpha_v < 0.004) {
+        discard;
+    }
+    let pv = p + r * plane_distance(sp, z2.x, alpha_v);
+    let delta_v = clamp(z2.z / alpha_v, 0.0, 1.0);
+    // Coverage: presence (LOD cross-fade) by optical depth, then the tree's mask.
+    let a = presence_alpha(alpha_v, in.rot.w);
+    if (masked && a <= mask_threshold(in.pos.xy, in.base_scale, in.rot.z)) {
+        discard;
+    }
+    if (!masked && a < 0.004) {
+        discard;
+    }
+    let world = instance_to_world(pv, in.base_scale, in.rot);
+    // Step 5: the light ray through p_v meets the plane through o facing the sun at p', and
+    // enters the tree at p_l (one iteration).
+    let lm = instance_dir_to_model(frame.sun_dir.xyz, in.rot);
+    let p1 = pv - lm * dot(pv - c, lm);
+    let zl = zfield3(sp, in.light_views.xyz, in.light_weights, p1, in.lod);
+    var pl = pv;
+    var tau = zp.sun.x;
+    if (zl.w > 0.004) {
+        pl = p1 - lm * plane_distance(sp, zl.x, zl.w);
+        // `opacity_scaled_tau`: τ times the optical depth the light view's opacity implies,
+        // relative to an opaque chord (1 for dense crowns; less through sparse ones).
+        if (zp.atlas.w > 0.5) {
+            tau = tau * log(1.0 - min(zl.w, 0.99)) / log(0.01);
+        }
+    }
+    let path_m = max(dot(pl - pv, lm), 0.0) * in.base_scale.w;
+    let world_l = instance_to_world(pl, in.base_scale, in.rot);
+    // Albedo and normal where the second iteration sampled.
+    let s = surface3(sp, in.views.xyz, in.weights, q, in.lod);
+    let tint = 0.85 + 0.3 * in.rot.z;
+    let albedo = s.color.rgb / max(s.color.a, 1e-4) * vec3<f32>(tint, mix(tint, 1.0, 0.5), 1.0);
+    let n = normalize(instance_dir_to_world(select(vec3<f32>(0.0, 1.0, 0.0), normalize(s.normal), dot(s.normal, s.normal) > 1e-12), in.rot));
+    let l = frame.sun_dir.xyz;
+    let v = normalize(frame.camera.xyz - world);
+    // Eq. 7: ρ p(v, l) exp(−τ‖p_l − p_v‖) F(v, l) V(p_l) L_sun; the phase function is
+    // isotropic (scaled by `sun_scale`), optionally blended towards the reference's leaf
+    // response at the baked normal (`normal_weight`).
+    let ndl = dot(n, l);
+    let leaf = max(ndl, 0.0) + zp.atlas.z * max(-ndl, 0.0);
+    let phase = zp.sun.y * mix(1.0, leaf / 0.34, zp.sky.z);
+    let sun = frame.sun_color.rgb * albedo * phase * exp(-tau * path_m) * hotspot(v, l)
+        * sun_visibility(world_l, vec3<f32>(0.0));
+    // Eq. 9: sky × δ_v × the cylindrical hole of the local density, d below the crown's top
+    // (the slope term (1 + n·u_z)/2 is 1: the terrain normal is not known here).
+    let top = instance_to_world(sp.bbox_max.xyz, in.base_scale, in.rot).y;
+    let d = max(top - world.y, 0.0);
+    let hole = 1.0 / (1.0 + d * d * zp.sky.y * 0.25);
+    let sky = albedo * sky_light(vec3<f32>(0.0, 1.0, 0.0)) * zp.sky.x * delta_v * hole;
+    let lit = debug_tint(apply_fog(sun + sky, world), world, TECHNIQUE_ZFIELD);
+    var out: ZFragment;
+    out.color = select(vec4<f32>(lit * a, a), vec4<f32>(lit, 1.0), masked);
+    let clip = frame.view_proj * vec4<f32>(world, 1.0);
+    out.depth = clamp(clip.z / max(clip.w, 1e-6), 0.0, 1.0);
+    return out;
+}
+
+// Shadow casters (BN12 §5): the quad facing the sun, step 5 only, at the max depth z̄ (the
+// trees' back side, so they do not shadow their own lit side); coverage thresholded (the 3×3
+// PCF softens it) — the depth-only cascades cannot store opacity.
+@vertex
+fn vs_zfield_shadow(in: ZIn, inst: TreeInstance) -> ZOut {
+    return z_vertex(in, inst, frame.sun_dir.xyz, true);
+}
+
+@fragment
+fn fs_zfield_shadow(in: ZOut) -> @builtin(frag_depth) f32 {
+    let sp = z_species[in.views.w];
+    let p = instance_to_model(in.world, in.base_scale, in.rot);
+    let lm = instance_dir_to_model(frame.sun_dir.xyz, in.rot);
+    let z = zfield3(sp, in.views.xyz, in.weights, p, in.lod);
+    if (z.w < 0.004) {
+        discard;
+    }
+    // Opaque where α > 1/2 (measured closest to the geometry's alpha-tested casters: ꟻLIP
+    // 0.0631 vs 0.0648 stochastic on the default scene); stochastic by opacity while the tree
+    // fades (an LOD transition), so its shadow fades too.
+    let a = presence_alpha(z.w, in.rot.w);
+    let threshold = select(0.5, hash13(vec3<f32>(in.pos.xy, 3.0 + 97.0 * in.rot.z)), in.rot.w < 0.999);
+    if (a <= threshold) {
+        discard;
+    }
+    let back = p - lm * plane_distance(sp, z.y, z.w);
+    let world = instance_to_world(back, in.base_scale, in.rot);
+    let clip = frame.view_proj * vec4<f32>(world, 1.0);
+    return clamp(clip.z / clip.w, 0.0, 1.0);
+}
