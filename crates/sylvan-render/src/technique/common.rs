@@ -301,3 +301,67 @@ impl TileAtlas {
         })
     }
 }
+
+/// `pick(level)` of every tile's mip chain, as [`TileAtlas::upload`] takes them.
+pub(crate) fn tile_chains(
+    tiles: &[&Vec<crate::bake::image::TileLevel>],
+    pick: fn(&crate::bake::image::TileLevel) -> &Vec<u8>,
+) -> Vec<Vec<Vec<u8>>> {
+    tiles
+        .iter()
+        .map(|levels| levels.iter().map(|l| pick(l).clone()).collect())
+        .collect()
+}
+
+/// A GPU storage buffer holding `contents`.
+pub(crate) fn storage_buffer(gpu: &Gpu, label: &str, contents: &[u8]) -> wgpu::Buffer {
+    use wgpu::util::DeviceExt;
+    gpu.device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents,
+            usage: wgpu::BufferUsages::STORAGE,
+        })
+}
+
+/// The CPU-driven twin of the GPU cull's mixed lists (one per pass holding every species,
+/// `rot.z` = species + tint seed, as the cull writes it) for one-quad-per-tree techniques:
+/// `staging` gets each pass's records, `ranges` their ranges; the camera pass is sorted back
+/// to front by the distance of each tree's frame centre (`centres`, per species, model
+/// space) when `sort_camera`.
+pub(crate) fn mixed_lists(
+    input: &crate::technique::FrameInput<'_>,
+    centres: &[glam::Vec3],
+    sort_camera: bool,
+    sort: &mut Vec<(f32, crate::instances::GpuTreeInstance)>,
+    staging: &mut Vec<crate::instances::GpuTreeInstance>,
+    ranges: &mut [std::ops::Range<u32>],
+) {
+    staging.clear();
+    for (pass, range) in ranges.iter_mut().enumerate() {
+        sort.clear();
+        for (s, centre) in centres.iter().enumerate() {
+            for rec in input.instances.records(pass, s) {
+                let [x, y, z, scale] = rec.base_scale;
+                let (c, sn) = (rec.rot[0], rec.rot[1]);
+                let q = *centre * scale;
+                let world =
+                    glam::Vec3::new(x + c * q.x + sn * q.z, y + q.y, z - sn * q.x + c * q.z);
+                sort.push((
+                    world.distance_squared(input.eye),
+                    crate::instances::GpuTreeInstance {
+                        base_scale: rec.base_scale,
+                        rot: [rec.rot[0], rec.rot[1], s as f32 + rec.rot[2], rec.rot[3]],
+                    },
+                ));
+            }
+        }
+        if pass == 0 && sort_camera {
+            // Back to front: premultiplied "over" needs the far trees first.
+            sort.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
+        }
+        let start = staging.len() as u32;
+        staging.extend(sort.iter().map(|x| x.1));
+        *range = start..staging.len() as u32;
+    }
+}

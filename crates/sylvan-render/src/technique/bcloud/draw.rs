@@ -90,14 +90,6 @@ pub struct BillboardCloud {
     windows: [[f32; 4]; LEVELS],
 }
 
-/// The tiles of one atlas, as [`TileAtlas::upload`] takes them.
-fn chains(tiles: &[&Vec<TileLevel>], pick: fn(&TileLevel) -> &Vec<u8>) -> Vec<Vec<Vec<u8>>> {
-    tiles
-        .iter()
-        .map(|levels| levels.iter().map(|l| pick(l).clone()).collect())
-        .collect()
-}
-
 /// The wood of branches up to `levels` deep (the trunk and main limbs): each kept node's own
 /// triangles (its subtree's minus its children's).
 pub fn simplified_wood(plant: &Plant, levels: u32) -> Mesh {
@@ -301,25 +293,25 @@ impl BillboardCloud {
             "bcloud_near_color",
             srgb,
             tile_near,
-            chains(&near_tiles, |l| &l.color),
+            common::tile_chains(&near_tiles, |l| &l.color),
         )?;
         let near_n = upload(
             "bcloud_near_normal",
             unorm,
             tile_near,
-            chains(&near_tiles, |l| &l.normal),
+            common::tile_chains(&near_tiles, |l| &l.normal),
         )?;
         let far_c = upload(
             "bcloud_far_color",
             srgb,
             tile_far,
-            chains(&far_tiles, |l| &l.color),
+            common::tile_chains(&far_tiles, |l| &l.color),
         )?;
         let far_n = upload(
             "bcloud_far_normal",
             unorm,
             tile_far,
-            chains(&far_tiles, |l| &l.normal),
+            common::tile_chains(&far_tiles, |l| &l.normal),
         )?;
         let params = GpuParams {
             level_first,
@@ -334,13 +326,7 @@ impl BillboardCloud {
             atlas_far: [far_c.per_row, far_c.per_layer, far_c.rows, 0],
         };
         let device = &gpu.device;
-        let storage = |label, contents: &[u8]| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage: wgpu::BufferUsages::STORAGE,
-            })
-        };
+        let storage = |label, contents: &[u8]| common::storage_buffer(gpu, label, contents);
         let plane_main: Vec<[u32; 20]> = gplanes
             .iter()
             .map(|p| p[..20].try_into().expect("20 words"))

@@ -77,14 +77,6 @@ fn views(grid: u32) -> Vec<GpuOctView> {
         .collect()
 }
 
-/// `pick(level)` of every tile's mip chain, as [`TileAtlas::upload`] takes them.
-fn chains(tiles: &[&Vec<TileLevel>], pick: fn(&TileLevel) -> &Vec<u8>) -> Vec<Vec<Vec<u8>>> {
-    tiles
-        .iter()
-        .map(|levels| levels.iter().map(|l| pick(l).clone()).collect())
-        .collect()
-}
-
 impl Octahedral {
     /// Uploads every species' views into one atlas and builds the pipelines.
     pub fn new(
@@ -127,12 +119,12 @@ impl Octahedral {
         let color = upload(
             "octahedral_atlas_color",
             wgpu::TextureFormat::Rgba8UnormSrgb,
-            chains(&tiles, |l| &l.color),
+            common::tile_chains(&tiles, |l| &l.color),
         )?;
         let normal = upload(
             "octahedral_atlas_normal",
             wgpu::TextureFormat::Rgba8Unorm,
-            chains(&tiles, |l| &l.normal),
+            common::tile_chains(&tiles, |l| &l.normal),
         )?;
         let atlas = GpuOctAtlas {
             tiles: [tile, color.per_row, color.per_layer, grid],
@@ -150,13 +142,7 @@ impl Octahedral {
             ],
         };
         let device = &gpu.device;
-        let storage = |label, contents: &[u8]| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage: wgpu::BufferUsages::STORAGE,
-            })
-        };
+        let storage = |label, contents: &[u8]| common::storage_buffer(gpu, label, contents);
         let species_buffer = storage("octahedral_species", bytemuck::cast_slice(&species));
         let view_buffer = storage("octahedral_views", bytemuck::cast_slice(&views(grid)));
         let atlas_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -235,32 +221,14 @@ impl Technique for Octahedral {
         _: &mut wgpu::CommandEncoder,
         input: &FrameInput<'_>,
     ) -> Result<(), RenderError> {
-        self.staging.clear();
-        for pass in 0..PASSES {
-            self.sort.clear();
-            for (s, centre) in self.centres.iter().enumerate() {
-                for rec in input.instances.records(pass, s) {
-                    let [x, y, z, scale] = rec.base_scale;
-                    let (c, sn) = (rec.rot[0], rec.rot[1]);
-                    let q = *centre * scale;
-                    let world = Vec3::new(x + c * q.x + sn * q.z, y + q.y, z - sn * q.x + c * q.z);
-                    self.sort.push((
-                        world.distance_squared(input.eye),
-                        GpuTreeInstance {
-                            base_scale: rec.base_scale,
-                            rot: [rec.rot[0], rec.rot[1], s as f32 + rec.rot[2], rec.rot[3]],
-                        },
-                    ));
-                }
-            }
-            if pass == 0 {
-                // Back to front: premultiplied "over" needs the far trees first.
-                self.sort.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
-            }
-            let start = self.staging.len() as u32;
-            self.staging.extend(self.sort.iter().map(|x| x.1));
-            self.ranges[pass] = start..self.staging.len() as u32;
-        }
+        common::mixed_lists(
+            input,
+            &self.centres,
+            true,
+            &mut self.sort,
+            &mut self.staging,
+            &mut self.ranges,
+        );
         self.instances
             .write(gpu, bytemuck::cast_slice(&self.staging))
     }

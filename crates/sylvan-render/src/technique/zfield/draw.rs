@@ -165,13 +165,7 @@ impl ZField {
             extra: [draw.lod_bias, 0.0, 0.0, 0.0],
         };
         let device = &gpu.device;
-        let storage = |label, contents: &[u8]| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage: wgpu::BufferUsages::STORAGE,
-            })
-        };
+        let storage = |label, contents: &[u8]| common::storage_buffer(gpu, label, contents);
         let species_buffer = storage("zfield_species", bytemuck::cast_slice(&species));
         let view_buffer = storage("zfield_views", bytemuck::cast_slice(&view_frames(grid)));
         let params_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -294,32 +288,14 @@ impl Technique for ZField {
         _: &mut wgpu::CommandEncoder,
         input: &FrameInput<'_>,
     ) -> Result<(), RenderError> {
-        self.staging.clear();
-        for pass in 0..PASSES {
-            self.sort.clear();
-            for (s, centre) in self.centres.iter().enumerate() {
-                for rec in input.instances.records(pass, s) {
-                    let [x, y, z, scale] = rec.base_scale;
-                    let (c, sn) = (rec.rot[0], rec.rot[1]);
-                    let q = *centre * scale;
-                    let world = Vec3::new(x + c * q.x + sn * q.z, y + q.y, z - sn * q.x + c * q.z);
-                    self.sort.push((
-                        world.distance_squared(input.eye),
-                        GpuTreeInstance {
-                            base_scale: rec.base_scale,
-                            rot: [rec.rot[0], rec.rot[1], s as f32 + rec.rot[2], rec.rot[3]],
-                        },
-                    ));
-                }
-            }
-            if pass == 0 && self.blend {
-                // Back to front: premultiplied "over" needs the far trees first.
-                self.sort.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
-            }
-            let start = self.staging.len() as u32;
-            self.staging.extend(self.sort.iter().map(|x| x.1));
-            self.ranges[pass] = start..self.staging.len() as u32;
-        }
+        common::mixed_lists(
+            input,
+            &self.centres,
+            self.blend,
+            &mut self.sort,
+            &mut self.staging,
+            &mut self.ranges,
+        );
         self.instances
             .write(gpu, bytemuck::cast_slice(&self.staging))
     }
