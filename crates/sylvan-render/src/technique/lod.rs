@@ -229,8 +229,12 @@ pub struct Chain {
     bands: Vec<Band>,
     techniques: Vec<Box<dyn Technique>>,
     lists: Vec<Instances>,
-    /// Lists each band's technique asks of the GPU cull.
-    request_counts: Vec<usize>,
+    /// Each band's technique's own list windows (those of its `list_requests`, fixed at
+    /// build), so a frame does not rebuild the requests.
+    request_windows: Vec<Vec<[f32; 4]>>,
+    /// Where each band's lists start in `DrawContext::culled` (a technique may ask for
+    /// several), and their end.
+    firsts: Vec<usize>,
 }
 
 impl Chain {
@@ -280,13 +284,21 @@ impl Chain {
                 cx.population.species_count(),
             ));
         }
-        let request_counts = techniques.iter().map(|t| t.list_requests().len()).collect();
+        let request_windows: Vec<Vec<[f32; 4]>> = techniques
+            .iter()
+            .map(|t| t.list_requests().iter().map(|r| r.window).collect())
+            .collect();
+        let mut firsts = vec![0];
+        for w in &request_windows {
+            firsts.push(firsts.last().copied().unwrap_or(0) + w.len());
+        }
         Ok(Built {
             technique: Box::new(Self {
                 bands,
                 techniques,
                 lists,
-                request_counts,
+                request_windows,
+                firsts,
             }),
             reports,
         })
@@ -294,17 +306,15 @@ impl Chain {
 }
 
 impl Chain {
-    /// Band `i`'s presence window: rising over ±FADE of its start, falling over ±FADE of its
-    /// end (open at the chain's two ends).
+    /// Band `i`'s presence window ([`BandRange::window`]; bands start at 0 and end open, so
+    /// the chain's two ends are open).
     fn band_window(&self, i: usize) -> [f32; 4] {
-        let (b, n) = (&self.bands[i], self.bands.len());
-        let (first, last) = (i == 0, i + 1 == n);
-        [
-            if first { -1e30 } else { b.start * (1.0 - FADE) },
-            if first { -1e30 } else { b.start * (1.0 + FADE) },
-            if last { 1e30 } else { b.end * (1.0 - FADE) },
-            if last { 1e30 } else { b.end * (1.0 + FADE) },
-        ]
+        let b = &self.bands[i];
+        BandRange {
+            start: b.start,
+            end: b.end,
+        }
+        .window()
     }
 }
 
@@ -338,19 +348,16 @@ impl Technique for Chain {
 
     fn draw(&self, pass: &mut wgpu::RenderPass<'_>, ctx: &DrawContext<'_>) -> DrawCounts {
         let mut counts = DrawCounts::default();
-        // Where each band's lists start in `ctx.culled` (a technique may ask for several).
-        let mut firsts = Vec::with_capacity(self.request_counts.len() + 1);
-        firsts.push(0);
-        for n in &self.request_counts {
-            firsts.push(firsts.last().copied().unwrap_or(0) + n);
-        }
         for (i, (t, list)) in self.techniques.iter().zip(&self.lists).enumerate() {
             let sub = DrawContext {
                 pass: ctx.pass,
                 frame_bind: ctx.frame_bind,
                 instances: list,
                 ranges: &list.ranges[ctx.pass],
-                culled: ctx.culled.get(firsts[i]..firsts[i + 1]).unwrap_or(&[]),
+                culled: ctx
+                    .culled
+                    .get(self.firsts[i]..self.firsts[i + 1])
+                    .unwrap_or(&[]),
             };
             counts += t.draw(pass, &sub);
         }
@@ -387,7 +394,7 @@ impl Technique for Chain {
             let band = self.band_window(i);
             let own = t
                 .list_windows(pixels_per_metre)
-                .unwrap_or_else(|| t.list_requests().iter().map(|r| r.window).collect());
+                .unwrap_or_else(|| self.request_windows[i].clone());
             out.extend(
                 own.into_iter()
                     .map(|w| crate::world::intersect_windows(w, band)),

@@ -65,6 +65,21 @@ impl BandRange {
         start: 0.0,
         end: f32::INFINITY,
     };
+
+    /// The band's presence window as the `auto` chain fades it ([`crate::world::ListRequest`]'s
+    /// `window`): rising over ±[`lod::FADE`] of its start, falling over ±`FADE` of its end;
+    /// open below a start of 0 and above an infinite end.
+    pub fn window(&self) -> [f32; 4] {
+        let (lo, hi) = (1.0 - lod::FADE, 1.0 + lod::FADE);
+        let open_start = self.start <= 0.0;
+        let open_end = !self.end.is_finite();
+        [
+            if open_start { -1e30 } else { self.start * lo },
+            if open_start { -1e30 } else { self.start * hi },
+            if open_end { 1e30 } else { self.end * lo },
+            if open_end { 1e30 } else { self.end * hi },
+        ]
+    }
 }
 
 /// Everything a technique is built from.

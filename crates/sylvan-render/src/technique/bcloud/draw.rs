@@ -511,30 +511,7 @@ impl BillboardCloud {
 
     /// The band's own window (as the `auto` chain fades it), intersected with each cloud's.
     fn composed(&self, w: [f32; 4]) -> [f32; 4] {
-        let b = self.band;
-        let band = [
-            if b.start <= 0.0 {
-                -1e30
-            } else {
-                b.start * (1.0 - FADE)
-            },
-            if b.start <= 0.0 {
-                -1e30
-            } else {
-                b.start * (1.0 + FADE)
-            },
-            if b.end.is_finite() {
-                b.end * (1.0 - FADE)
-            } else {
-                1e30
-            },
-            if b.end.is_finite() {
-                b.end * (1.0 + FADE)
-            } else {
-                1e30
-            },
-        ];
-        crate::world::intersect_windows(w, band)
+        crate::world::intersect_windows(w, self.band.window())
     }
 
     /// The draws of cloud `level` in order: each species' wood, then each species' planes.
