@@ -59,6 +59,9 @@ pub struct Gpu {
     /// Whether GPU timestamp queries (inside encoders) are available.
     pub timestamps: bool,
     errors: Arc<Mutex<Vec<String>>>,
+    /// Whether the device is the caller's ([`Gpu::from_parts`]): its uncaptured-error handler
+    /// is theirs, so Sylvan captures its own errors with error scopes instead.
+    external: bool,
 }
 
 impl Gpu {
@@ -134,14 +137,7 @@ impl Gpu {
         let sink = errors.clone();
         device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
             if let Ok(mut v) = sink.lock() {
-                // wgpu's message spans several lines (error, then causes): keep it on one.
-                let text = e.to_string();
-                let parts: Vec<&str> = text
-                    .lines()
-                    .map(str::trim)
-                    .filter(|l| !l.is_empty())
-                    .collect();
-                v.push(parts.join(" "));
+                v.push(one_line(&e.to_string()));
             }
         }));
         Ok(Self {
@@ -152,7 +148,61 @@ impl Gpu {
             info,
             timestamps,
             errors,
+            external: false,
         })
+    }
+
+    /// Wraps a device the caller already has (their own wgpu renderer, Bevy's `RenderDevice`):
+    /// Sylvan records into it and leaves its settings and its uncaptured-error handler alone.
+    /// Errors of Sylvan's own resource creation are caught with error scopes
+    /// ([`Gpu::scoped`]); errors in recorded work reach the caller's handler.
+    ///
+    /// The device should have the adapter's limits (Sylvan's atlases and storage buffers need
+    /// more than wgpu's defaults); every allocation is checked against `device.limits()` first.
+    pub fn from_parts(
+        instance: wgpu::Instance,
+        adapter: wgpu::Adapter,
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+    ) -> Self {
+        let want =
+            wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
+        Self {
+            info: adapter.get_info(),
+            timestamps: device.features().contains(want),
+            instance,
+            adapter,
+            device,
+            queue,
+            errors: Arc::new(Mutex::new(Vec::new())),
+            external: true,
+        }
+    }
+
+    /// Whether the device is the caller's ([`Gpu::from_parts`]).
+    pub fn is_external(&self) -> bool {
+        self.external
+    }
+
+    /// Runs `f`, catching the validation and out-of-memory errors it causes: on a caller's
+    /// device through error scopes (their handler never sees them), on Sylvan's own device
+    /// through its handler. Returns `f`'s error, or the first GPU error, as `E`.
+    pub fn scoped<T, E: From<GpuError>>(&self, f: impl FnOnce() -> Result<T, E>) -> Result<T, E> {
+        if !self.external {
+            let out = f()?;
+            self.check()?;
+            return Ok(out);
+        }
+        let memory = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let out = f();
+        let first = pollster::block_on(validation.pop());
+        let second = pollster::block_on(memory.pop());
+        let out = out?;
+        match first.or(second) {
+            Some(e) => Err(GpuError::Wgpu(one_line(&e.to_string())).into()),
+            None => Ok(out),
+        }
     }
 
     /// "name (backend, driver)" for stats output.
@@ -204,4 +254,14 @@ impl Gpu {
         }
         Ok(())
     }
+}
+
+/// wgpu's message spans several lines (error, then causes): keep it on one.
+fn one_line(text: &str) -> String {
+    let parts: Vec<&str> = text
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .collect();
+    parts.join(" ")
 }

@@ -22,6 +22,7 @@ pub struct GpuFrame {
     pub sky_ground: [f32; 4],
     pub cascade_far: [f32; 4],
     pub shadow_params: [f32; 4],
+    pub target: [f32; 4],
 }
 
 /// A perspective view: where the eye is and what it sees.
@@ -203,12 +204,15 @@ pub struct FrameResources {
     pub cascade_views: Vec<wgpu::TextureView>,
     /// Shadow-map resolution per cascade.
     pub shadow_resolution: u32,
+    /// The main pass's attachments, which every main-pass pipeline is built for.
+    pub target: crate::pipeline::MainTarget,
     shadow_map: wgpu::Texture,
 }
 
 impl FrameResources {
-    /// Creates layouts, buffers and a `resolution²` shadow map per cascade.
-    pub fn new(gpu: &Gpu, resolution: u32) -> Self {
+    /// Creates layouts, buffers and a `resolution²` shadow map per cascade, for main passes
+    /// into `target`.
+    pub fn new(gpu: &Gpu, resolution: u32, target: crate::pipeline::MainTarget) -> Self {
         let device = &gpu.device;
         let main_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("frame_main_layout"),
@@ -319,6 +323,7 @@ impl FrameResources {
             cascade_binds,
             cascade_views,
             shadow_resolution: resolution,
+            target,
             shadow_map,
         }
     }

@@ -31,5 +31,9 @@ pub mod world;
 
 pub use error::RenderError;
 pub use frame::DebugView;
-pub use renderer::{FrameStats, RenderOptions, Renderer, load_plants};
+pub use pipeline::{ColorOutput, DepthConvention, MainTarget};
+pub use renderer::{
+    CameraMatrices, FrameStats, Layers, PreparedFrame, RenderOptions, Renderer, load_plants,
+};
+pub use technique::DrawCounts;
 pub use technique::{Technique, registry};

@@ -6,10 +6,124 @@ use sylvan_gpu::{DEPTH_FORMAT, Gpu};
 /// HDR colour format of the main pass (linear radiance, tone-mapped in the resolve).
 pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 
+/// Which way depth runs in the main pass's depth buffer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DepthConvention {
+    /// 1 at the near plane, 0 at the far plane (or infinitely far); compare `GreaterEqual`.
+    /// Sylvan's own and Bevy's.
+    Reversed,
+    /// 0 at the near plane, 1 at the far plane; compare `LessEqual`.
+    Standard,
+}
+
+/// What the main pass's fragment shaders write to the colour attachment.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ColorOutput {
+    /// Scene-referred linear radiance, exposure not applied: Sylvan's own HDR target, which
+    /// its resolve exposes and tone-maps.
+    Radiance,
+    /// Linear radiance × exposure, for a caller's HDR target that the caller tone-maps.
+    Exposed,
+    /// Exposure and Sylvan's tone curve (ACES fit, as its resolve) applied per fragment, for
+    /// an LDR target (`Rgba8UnormSrgb`, `Bgra8UnormSrgb`, …). Blending happens after the curve,
+    /// so translucent edges differ slightly from Sylvan's own resolve.
+    ToneMapped,
+}
+
+impl ColorOutput {
+    /// The code `frame.wgsl` reads (`Frame::main_target.x`).
+    pub(crate) fn code(self) -> f32 {
+        match self {
+            ColorOutput::Radiance => 0.0,
+            ColorOutput::Exposed => 1.0,
+            ColorOutput::ToneMapped => 2.0,
+        }
+    }
+}
+
+/// The attachments the main pass draws into: Sylvan's own offscreen target, or a caller's
+/// (the embedding API). Every main-pass pipeline is built for it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MainTarget {
+    /// Colour attachment format.
+    pub color_format: wgpu::TextureFormat,
+    /// Depth attachment format (a depth format with a 32- or 24-bit depth aspect).
+    pub depth_format: wgpu::TextureFormat,
+    /// Multisample count of both attachments (1, or 4 as Bevy's default).
+    pub sample_count: u32,
+    /// Depth direction of the caller's projection.
+    pub depth: DepthConvention,
+    /// What the shaders write.
+    pub output: ColorOutput,
+}
+
+impl MainTarget {
+    /// Sylvan's own main target: HDR radiance, reversed-Z `Depth32Float`, one sample.
+    pub const OWN: MainTarget = MainTarget {
+        color_format: HDR_FORMAT,
+        depth_format: DEPTH_FORMAT,
+        sample_count: 1,
+        depth: DepthConvention::Reversed,
+        output: ColorOutput::Radiance,
+    };
+
+    /// The depth comparison of main-pass pipelines.
+    pub fn compare(&self) -> wgpu::CompareFunction {
+        match self.depth {
+            DepthConvention::Reversed => wgpu::CompareFunction::GreaterEqual,
+            DepthConvention::Standard => wgpu::CompareFunction::LessEqual,
+        }
+    }
+
+    /// The depth value of the far plane (what a depth buffer is cleared to).
+    pub fn far_depth(&self) -> f32 {
+        match self.depth {
+            DepthConvention::Reversed => 0.0,
+            DepthConvention::Standard => 1.0,
+        }
+    }
+
+    /// Checks the target against what Sylvan's shaders and the device can draw into.
+    pub fn check(&self, gpu: &Gpu) -> Result<(), crate::RenderError> {
+        let bad = |why: String| Err(crate::RenderError::Option(why));
+        let f = self.color_format;
+        if f.is_depth_stencil_format() || f.is_compressed() {
+            return bad(format!(
+                "main target colour format {f:?} is not a colour render format — use an RGBA/BGRA 8-bit or 16-bit float format"
+            ));
+        }
+        if !matches!(
+            f.sample_type(None, None),
+            Some(wgpu::TextureSampleType::Float { .. })
+        ) {
+            return bad(format!(
+                "main target colour format {f:?} is an integer format; Sylvan's shaders write floats — use Rgba16Float or an sRGB 8-bit format"
+            ));
+        }
+        if !self.depth_format.has_depth_aspect() {
+            return bad(format!(
+                "main target depth format {:?} has no depth — use Depth32Float",
+                self.depth_format
+            ));
+        }
+        for format in [f, self.depth_format] {
+            let flags = gpu.adapter.get_texture_format_features(format).flags;
+            if !flags.sample_count_supported(self.sample_count) {
+                return bad(format!(
+                    "main target {format:?} with {} samples is not supported by '{}' — use 1 or 4 samples",
+                    self.sample_count, gpu.info.name
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Which pass a pipeline draws in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum PassKind {
-    /// The main view: HDR colour + reversed-Z depth (compare Greater).
+    /// The main view, into the renderer's [`MainTarget`] (Sylvan's own: HDR colour and
+    /// reversed-Z depth).
     Main,
     /// A shadow cascade: depth only, standard Z (compare Less), with slope-scaled bias.
     Shadow,
@@ -31,6 +145,8 @@ pub struct PipelineSpec<'a> {
     pub buffers: &'a [Option<wgpu::VertexBufferLayout<'a>>],
     /// Pass kind.
     pub pass: PassKind,
+    /// The main pass's attachments (`FrameResources::target`; unused by shadow passes).
+    pub target: &'a MainTarget,
     /// Face culling (`None`: two-sided).
     pub cull: Option<wgpu::Face>,
     /// Whether the pipeline writes depth.
@@ -51,10 +167,7 @@ pub fn build(gpu: &Gpu, spec: &PipelineSpec) -> wgpu::RenderPipeline {
             immediate_size: 0,
         });
     let (compare, bias) = match spec.pass {
-        PassKind::Main => (
-            wgpu::CompareFunction::GreaterEqual,
-            wgpu::DepthBiasState::default(),
-        ),
+        PassKind::Main => (spec.target.compare(), wgpu::DepthBiasState::default()),
         PassKind::Shadow => (
             wgpu::CompareFunction::LessEqual,
             wgpu::DepthBiasState {
@@ -65,7 +178,7 @@ pub fn build(gpu: &Gpu, spec: &PipelineSpec) -> wgpu::RenderPipeline {
         ),
     };
     let targets = [Some(wgpu::ColorTargetState {
-        format: HDR_FORMAT,
+        format: spec.target.color_format,
         blend: spec.blend,
         write_mask: wgpu::ColorWrites::ALL,
     })];
@@ -94,13 +207,22 @@ pub fn build(gpu: &Gpu, spec: &PipelineSpec) -> wgpu::RenderPipeline {
                 ..Default::default()
             },
             depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
+                format: match spec.pass {
+                    PassKind::Main => spec.target.depth_format,
+                    PassKind::Shadow => DEPTH_FORMAT,
+                },
                 depth_write_enabled: Some(spec.depth_write),
                 depth_compare: Some(compare),
                 stencil: Default::default(),
                 bias,
             }),
-            multisample: Default::default(),
+            multisample: wgpu::MultisampleState {
+                count: match spec.pass {
+                    PassKind::Main => spec.target.sample_count,
+                    PassKind::Shadow => 1,
+                },
+                ..Default::default()
+            },
             multiview_mask: None,
             cache: None,
         })

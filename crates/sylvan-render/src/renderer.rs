@@ -4,7 +4,7 @@ use crate::RenderError;
 use crate::bake::{BakeReport, CachePolicy};
 use crate::frame::{self, CASCADES, DebugView, FrameResources, Frustum, GpuFrame, View};
 use crate::instances::{Instances, SpeciesBounds};
-use crate::pipeline::HDR_FORMAT;
+use crate::pipeline::{HDR_FORMAT, MainTarget};
 use crate::sky::SkyPass;
 use crate::technique::{
     BakeProgress, BandRange, BuildContext, DrawContext, DrawCounts, FrameInput, Technique, registry,
@@ -118,6 +118,72 @@ pub struct FrameStats {
     pub technique_stats: BTreeMap<String, BTreeMap<String, f64>>,
 }
 
+/// A caller's camera for the embedding API: the view and projection matrices it draws its
+/// own geometry with (right-handed, Y up, a perspective projection in either depth
+/// convention, finite or infinite far plane), and the size of its attachments in pixels.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CameraMatrices {
+    /// World → view.
+    pub view: Mat4,
+    /// View → clip, depth in 0..1 as the renderer's [`MainTarget`] says.
+    pub proj: Mat4,
+    /// Attachment width in pixels.
+    pub width: u32,
+    /// Attachment height in pixels.
+    pub height: u32,
+}
+
+/// What [`Renderer::draw`] records into a caller's pass.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Layers {
+    /// Sylvan's sky gradient and sun disc, at the far plane (record it first).
+    pub sky: bool,
+    /// Sylvan's terrain mesh of the scene (leave it off when the caller draws the ground).
+    pub terrain: bool,
+    /// The trees.
+    pub trees: bool,
+}
+
+impl Layers {
+    /// Sky, terrain and trees: what [`Renderer::render`] draws.
+    pub const ALL: Layers = Layers {
+        sky: true,
+        terrain: true,
+        trees: true,
+    };
+    /// Trees only, for a caller who draws its own sky and ground.
+    pub const TREES: Layers = Layers {
+        sky: false,
+        terrain: false,
+        trees: true,
+    };
+}
+
+/// What [`Renderer::prepare`] recorded.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct PreparedFrame {
+    /// CPU milliseconds of the frame's preparation (culling, level of detail, uploads).
+    pub cpu_ms: f64,
+    /// Draw calls and triangles recorded in the shadow-cascade passes (triangles of
+    /// GPU-driven lists are not known on the CPU and are not counted).
+    pub shadow: DrawCounts,
+}
+
+/// The view a frame is drawn from: the [`View`] that shadow cascades and culling distances
+/// are fitted to, the exact world → clip matrix the main pass uses (the caller's, when
+/// embedded), and the level-of-detail scale.
+struct FrameView {
+    view: View,
+    view_proj: Mat4,
+    pixels_per_metre: f32,
+}
+
+/// Pixels covered by one metre at one metre's distance, for a vertical field of view of
+/// `fov_y` radians over `height` pixels.
+fn pixels_per_metre(fov_y: f32, height: u32) -> f32 {
+    height as f32 / (2.0 * (fov_y * 0.5).tan())
+}
+
 struct Targets {
     hdr: RenderTarget,
     output: RenderTarget,
@@ -142,7 +208,11 @@ pub struct Renderer {
     trees_in_world: usize,
     resolver: Resolver,
     timer: FrameTimer,
-    targets: Targets,
+    /// Sylvan's own HDR and output targets; `None` when it draws into a caller's
+    /// ([`Renderer::for_target`]).
+    targets: Option<Targets>,
+    /// Whether the frame being drawn has shadows (set by the frame's preparation).
+    shadows_now: bool,
     scene_sky: sylvan_scene::Sky,
     fog_half: f32,
     far: f32,
@@ -181,12 +251,43 @@ impl Renderer {
         Self::with_progress(gpu, scene, plants, options, &mut |_, _, _| {})
     }
 
+    /// A renderer that draws into a caller's attachments (the embedding API): every
+    /// main-pass pipeline is built for `target`'s formats, sample count, depth convention
+    /// and colour output, and no offscreen targets are made (`options.width`/`height` and
+    /// `spp` are unused; the size comes with each frame's [`CameraMatrices`]). Record each
+    /// frame with [`Renderer::prepare`] and [`Renderer::draw`]; [`Renderer::render`] refuses.
+    ///
+    /// On a caller's device ([`Gpu::from_parts`]) errors while building are caught with
+    /// error scopes and returned; the caller's error handler never sees them.
+    pub fn for_target(
+        gpu: &Gpu,
+        scene: &Scene,
+        plants: &[Plant],
+        options: &RenderOptions,
+        target: MainTarget,
+        progress: BakeProgress<'_>,
+    ) -> Result<Self, RenderError> {
+        target.check(gpu)?;
+        gpu.scoped(|| Self::build(gpu, scene, plants, options, Some(target), progress))
+    }
+
     /// [`Renderer::new`], reporting bake progress as (plant, done, total).
     pub fn with_progress(
         gpu: &Gpu,
         scene: &Scene,
         plants: &[Plant],
         options: &RenderOptions,
+        progress: BakeProgress<'_>,
+    ) -> Result<Self, RenderError> {
+        gpu.scoped(|| Self::build(gpu, scene, plants, options, None, progress))
+    }
+
+    fn build(
+        gpu: &Gpu,
+        scene: &Scene,
+        plants: &[Plant],
+        options: &RenderOptions,
+        caller_target: Option<MainTarget>,
         progress: BakeProgress<'_>,
     ) -> Result<Self, RenderError> {
         if plants.len() != scene.species.len() {
@@ -214,9 +315,18 @@ impl Renderer {
                 ((MAX_SHADOW_BYTES / (CASCADES as u64 * 4)) as f64).sqrt() as u32 & !255
             )));
         }
-        let frame = FrameResources::new(gpu, res);
+        let frame = FrameResources::new(gpu, res, caller_target.unwrap_or(MainTarget::OWN));
         let resolver = Resolver::new(gpu);
-        let targets = Self::make_targets(gpu, &resolver, options.width, options.height, factor)?;
+        let targets = match caller_target {
+            Some(_) => None,
+            None => Some(Self::make_targets(
+                gpu,
+                &resolver,
+                options.width,
+                options.height,
+                factor,
+            )?),
+        };
         let bounds: Vec<SpeciesBounds> = plants
             .iter()
             .map(|p| SpeciesBounds {
@@ -298,13 +408,13 @@ impl Renderer {
             resolver,
             timer: FrameTimer::new(gpu, options.wall_timer),
             targets,
+            shadows_now: false,
             scene_sky: scene.sky,
             fog_half: scene.fog.half_distance_m,
             far: (t.size[0].hypot(t.size[1]) + (hi - lo) + 500.0).max(1000.0),
             caster_reach: (hi - lo) + tallest + 50.0,
             options: options.clone(),
         };
-        gpu.check()?;
         Ok(renderer)
     }
 
@@ -336,14 +446,23 @@ impl Renderer {
         })
     }
 
-    /// Changes the output size (targets are re-created only when it differs).
+    /// Changes the output size (targets are re-created only when it differs; a renderer
+    /// drawing into a caller's target only records the size).
     pub fn resize(&mut self, gpu: &Gpu, width: u32, height: u32) -> Result<(), RenderError> {
-        if (width, height) != (self.targets.output.width, self.targets.output.height) {
-            self.targets =
-                Self::make_targets(gpu, &self.resolver, width, height, self.targets.factor)?;
-            self.options.width = width;
-            self.options.height = height;
+        if (width, height) == (self.options.width, self.options.height) {
+            return Ok(());
         }
+        if let Some(t) = &self.targets {
+            self.targets = Some(Self::make_targets(
+                gpu,
+                &self.resolver,
+                width,
+                height,
+                t.factor,
+            )?);
+        }
+        self.options.width = width;
+        self.options.height = height;
         Ok(())
     }
 
@@ -353,7 +472,7 @@ impl Renderer {
             eye: camera.position,
             target: camera.look_at,
             fov_y: camera.fov_deg.clamp(1.0, 170.0).to_radians(),
-            aspect: self.targets.output.width as f32 / self.targets.output.height as f32,
+            aspect: self.options.width as f32 / self.options.height.max(1) as f32,
             near: 0.25,
             far: self.far,
         }
@@ -366,116 +485,32 @@ impl Renderer {
         camera: &Camera,
         sun: &Sun,
     ) -> Result<FrameStats, RenderError> {
+        if self.targets.is_none() {
+            return Err(RenderError::Option(
+                "this renderer draws into a caller's target (Renderer::for_target): record each frame with prepare and draw".into(),
+            ));
+        }
         let view = self.view(camera);
-        let sun_dir = sun.direction();
-        let shadows = self.options.shadows && sun_dir.y > 0.0;
-        let cascades = frame::fit_cascades(
-            &view,
-            sun_dir,
-            self.options.shadow_distance,
-            self.caster_reach,
-            self.frame.shadow_resolution,
-        );
-        let view_proj = view.view_proj();
-        let frustum = Frustum::from_matrix(view_proj);
+        let frame_view = FrameView {
+            view,
+            view_proj: view.view_proj(),
+            pixels_per_metre: pixels_per_metre(view.fov_y, self.options.height),
+        };
         let mut encoder = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("frame"),
             });
         self.timer.begin(&mut encoder);
-        let cpu_start = std::time::Instant::now();
-        let windows = match self.world {
-            Some(_) => self.technique.list_windows(self.pixels_per_metre(&view)),
-            None => None,
+        let prepared = self.record_prepare(gpu, &mut encoder, &frame_view, sun)?;
+        let Some(t) = &self.targets else {
+            unreachable!("checked above")
         };
-        if let Some(world) = &mut self.world {
-            if let Some(w) = &windows {
-                world.set_windows(w);
-            }
-            let mut frustums: [Option<Frustum>; 1 + CASCADES] = Default::default();
-            frustums[0] = Some(frustum);
-            for (f, c) in frustums[1..].iter_mut().zip(&cascades) {
-                *f = shadows.then(|| Frustum::from_matrix(c.view_proj));
-            }
-            let wv = WorldView {
-                eye: view.eye,
-                far: view.far,
-                frustums: &frustums,
-            };
-            world.prepare(gpu, &mut encoder, &wv)?;
-        } else {
-            self.instances.update(
-                gpu,
-                &frustum,
-                view.eye,
-                view.far,
-                shadows.then_some(&cascades),
-            );
-        }
-
-        let input = FrameInput {
-            eye: view.eye,
-            pixels_per_metre: self.pixels_per_metre(&view),
-            sun_dir,
-            instances: &self.instances,
-            shadow_texel_m: cascades.map(|c| {
-                let m = c.view_proj;
-                // An orthographic cascade maps 2 / |row x| metres onto its resolution.
-                let row_x = Vec3::new(m.x_axis.x, m.y_axis.x, m.z_axis.x).length();
-                2.0 / row_x.max(1e-9) / self.frame.shadow_resolution as f32
-            }),
-            cascade_far: cascades.map(|c| c.far),
-        };
-        self.technique.prepare_frame(gpu, &mut encoder, &input)?;
-        let cpu_ms = cpu_start.elapsed().as_secs_f64() * 1e3;
-
-        let raw = self.frame_uniforms(&view, view_proj, sun, sun_dir, shadows, &cascades);
-        gpu.queue
-            .write_buffer(&self.frame.uniforms, 0, bytemuck::bytes_of(&raw));
-        for (c, buffer) in cascades.iter().zip(&self.frame.cascade_uniforms) {
-            let mut r = raw;
-            r.view_proj = c.view_proj.to_cols_array_2d();
-            gpu.queue.write_buffer(buffer, 0, bytemuck::bytes_of(&r));
-        }
-
-        let culled = self.world.as_ref().map(World::culled).unwrap_or_default();
-        let mut shadow_counts = DrawCounts::default();
-        // With shadows off the maps are never sampled (`sun_dir.w` = 0): skip the passes.
-        for c in (0..CASCADES).filter(|_| shadows) {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("shadow_pass"),
-                color_attachments: &[],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &self.frame.cascade_views[c],
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_bind_group(0, &self.frame.cascade_binds[c], &[]);
-            shadow_counts.draw_calls += self.terrain.draw(&mut pass, true);
-            shadow_counts.triangles += self.terrain.triangles();
-            let ctx = DrawContext {
-                pass: 1 + c,
-                frame_bind: &self.frame.cascade_binds[c],
-                instances: &self.instances,
-                ranges: &self.instances.ranges[1 + c],
-                culled: &culled,
-            };
-            shadow_counts += self.technique.draw(&mut pass, &ctx);
-        }
-        let mut main_counts = DrawCounts::default();
-        {
+        let mut main_counts = {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("main_pass"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &self.targets.hdr.color_view,
+                    view: &t.hdr.color_view,
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations {
@@ -484,9 +519,9 @@ impl Renderer {
                     },
                 })],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &self.targets.hdr.depth_view,
+                    view: &t.hdr.depth_view,
                     depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(0.0),
+                        load: wgpu::LoadOp::Clear(self.frame.target.far_depth()),
                         store: wgpu::StoreOp::Store,
                     }),
                     stencil_ops: None,
@@ -495,20 +530,8 @@ impl Renderer {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_bind_group(0, &self.frame.main_bind, &[]);
-            main_counts.draw_calls += self.sky.draw(&mut pass);
-            main_counts.draw_calls += self.terrain.draw(&mut pass, false);
-            main_counts.triangles += self.terrain.triangles();
-            let ctx = DrawContext {
-                pass: 0,
-                frame_bind: &self.frame.main_bind,
-                instances: &self.instances,
-                ranges: &self.instances.ranges[0],
-                culled: &culled,
-            };
-            main_counts += self.technique.draw(&mut pass, &ctx);
-        }
-        let t = &self.targets;
+            self.draw(&mut pass, Layers::ALL)
+        };
         self.resolver.encode(
             gpu,
             &mut encoder,
@@ -521,33 +544,16 @@ impl Renderer {
         gpu.queue.submit([encoder.finish()]);
         let frame_ms = self.timer.read_ms(gpu)?;
         gpu.check()?;
+        let mut shadow_counts = prepared.shadow;
         let mut world_stats = None;
         let mut trees_drawn_gpu = None;
-        if let Some(world) = &mut self.world {
+        if self.world.is_some() {
             // The frame is done (the timer waited): its counts are ready without a stall.
-            world.finish_frame(gpu)?;
-            let world = &*world;
-            let tris = |pass: usize| -> u64 {
-                let per_request = self.requests.iter().enumerate().map(|(r, req)| {
-                    req.draws
-                        .iter()
-                        .map(|d| world.listed(r, pass, d.group as usize) as u64 * d.triangles())
-                        .sum::<u64>()
-                });
-                per_request.sum()
-            };
-            let mut drawn: BTreeMap<String, u32> = BTreeMap::new();
-            for (r, req) in self.requests.iter().enumerate() {
-                let n: u32 = (0..world.groups(r)).map(|g| world.listed(r, 0, g)).sum();
-                *drawn.entry(req.technique.to_string()).or_default() += n;
-            }
+            let (drawn, main_tris, shadow_tris) = self.read_world_counts(gpu)?;
             trees_drawn_gpu = Some(drawn);
-            main_counts.triangles = self.terrain.triangles() + tris(0);
-            shadow_counts.triangles = (1..=CASCADES)
-                .filter(|_| shadows)
-                .map(|p| self.terrain.triangles() + tris(p))
-                .sum();
-            world_stats = Some(world.stats());
+            main_counts.triangles = main_tris;
+            shadow_counts.triangles = shadow_tris;
+            world_stats = self.world.as_ref().map(World::stats);
         }
 
         let asset_bytes = self.technique.bytes();
@@ -569,7 +575,7 @@ impl Renderer {
         Ok(FrameStats {
             technique_stats,
             frame_ms,
-            cpu_ms,
+            cpu_ms: prepared.cpu_ms,
             timer: self.timer.kind(),
             trees_total: match &self.world {
                 Some(_) => self.trees_in_world,
@@ -588,35 +594,187 @@ impl Renderer {
             shadow_triangles: shadow_counts.triangles,
             draw_calls: main_counts.draw_calls + shadow_counts.draw_calls + 1,
             asset_bytes,
-            gpu_bytes: asset_bytes
-                + self.terrain.bytes()
-                + self.frame.bytes()
-                + t.hdr.bytes()
-                + t.output.bytes()
-                + self.instances.buffer().size()
-                + self.world.as_ref().map_or(0, World::bytes),
+            gpu_bytes: self.gpu_bytes(),
         })
     }
 
-    /// The last rendered frame as an sRGB image.
-    pub fn read_image(&self, gpu: &Gpu) -> Result<image::RgbaImage, RenderError> {
-        Ok(sylvan_gpu::read_rgba8(gpu, &self.targets.output.color)?)
+    /// GPU bytes of everything the renderer holds (assets, terrain, shadow maps, own targets,
+    /// instance and world buffers).
+    pub fn gpu_bytes(&self) -> u64 {
+        self.technique.bytes()
+            + self.terrain.bytes()
+            + self.frame.bytes()
+            + self
+                .targets
+                .as_ref()
+                .map_or(0, |t| t.hdr.bytes() + t.output.bytes())
+            + self.instances.buffer().size()
+            + self.world.as_ref().map_or(0, World::bytes)
     }
 
-    /// Pixels covered by one metre at one metre's distance in the output image.
-    fn pixels_per_metre(&self, view: &View) -> f32 {
-        self.targets.output.height as f32 / (2.0 * (view.fov_y * 0.5).tan())
+    /// Records everything of a frame that happens outside the main pass: tile uploads and
+    /// the GPU cull (world), the technique's per-frame work, the frame uniforms and the
+    /// shadow-cascade passes.
+    fn record_prepare(
+        &mut self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        fv: &FrameView,
+        sun: &Sun,
+    ) -> Result<PreparedFrame, RenderError> {
+        let view = &fv.view;
+        let sun_dir = sun.direction();
+        let shadows = self.options.shadows && sun_dir.y > 0.0;
+        self.shadows_now = shadows;
+        let cascades = frame::fit_cascades(
+            view,
+            sun_dir,
+            self.options.shadow_distance,
+            self.caster_reach,
+            self.frame.shadow_resolution,
+        );
+        let frustum = Frustum::from_matrix(fv.view_proj);
+        let cpu_start = std::time::Instant::now();
+        let windows = match self.world {
+            Some(_) => self.technique.list_windows(fv.pixels_per_metre),
+            None => None,
+        };
+        if let Some(world) = &mut self.world {
+            if let Some(w) = &windows {
+                world.set_windows(w);
+            }
+            let mut frustums: [Option<Frustum>; 1 + CASCADES] = Default::default();
+            frustums[0] = Some(frustum);
+            for (f, c) in frustums[1..].iter_mut().zip(&cascades) {
+                *f = shadows.then(|| Frustum::from_matrix(c.view_proj));
+            }
+            let wv = WorldView {
+                eye: view.eye,
+                far: view.far,
+                frustums: &frustums,
+            };
+            world.prepare(gpu, encoder, &wv)?;
+        } else {
+            self.instances.update(
+                gpu,
+                &frustum,
+                view.eye,
+                view.far,
+                shadows.then_some(&cascades),
+            );
+        }
+
+        let input = FrameInput {
+            eye: view.eye,
+            pixels_per_metre: fv.pixels_per_metre,
+            sun_dir,
+            instances: &self.instances,
+            shadow_texel_m: cascades.map(|c| {
+                let m = c.view_proj;
+                // An orthographic cascade maps 2 / |row x| metres onto its resolution.
+                let row_x = Vec3::new(m.x_axis.x, m.y_axis.x, m.z_axis.x).length();
+                2.0 / row_x.max(1e-9) / self.frame.shadow_resolution as f32
+            }),
+            cascade_far: cascades.map(|c| c.far),
+        };
+        self.technique.prepare_frame(gpu, encoder, &input)?;
+        let cpu_ms = cpu_start.elapsed().as_secs_f64() * 1e3;
+
+        let raw = self.frame_uniforms(fv, sun, sun_dir, shadows, &cascades);
+        gpu.queue
+            .write_buffer(&self.frame.uniforms, 0, bytemuck::bytes_of(&raw));
+        for (c, buffer) in cascades.iter().zip(&self.frame.cascade_uniforms) {
+            let mut r = raw;
+            r.view_proj = c.view_proj.to_cols_array_2d();
+            gpu.queue.write_buffer(buffer, 0, bytemuck::bytes_of(&r));
+        }
+
+        let culled = self.world.as_ref().map(World::culled).unwrap_or_default();
+        let mut shadow = DrawCounts::default();
+        // With shadows off the maps are never sampled (`sun_dir.w` = 0): skip the passes.
+        for c in (0..CASCADES).filter(|_| shadows) {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("shadow_pass"),
+                color_attachments: &[],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &self.frame.cascade_views[c],
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_bind_group(0, &self.frame.cascade_binds[c], &[]);
+            shadow.draw_calls += self.terrain.draw(&mut pass, true);
+            shadow.triangles += self.terrain.triangles();
+            let ctx = DrawContext {
+                pass: 1 + c,
+                frame_bind: &self.frame.cascade_binds[c],
+                instances: &self.instances,
+                ranges: &self.instances.ranges[1 + c],
+                culled: &culled,
+            };
+            shadow += self.technique.draw(&mut pass, &ctx);
+        }
+        Ok(PreparedFrame { cpu_ms, shadow })
+    }
+
+    /// After a frame's submission: trees drawn per technique, and the camera's and the
+    /// shadow passes' triangles, from the GPU cull's counts (blocks until they are mapped).
+    fn read_world_counts(
+        &mut self,
+        gpu: &Gpu,
+    ) -> Result<(BTreeMap<String, u32>, u64, u64), RenderError> {
+        let Some(world) = &mut self.world else {
+            return Ok(Default::default());
+        };
+        world.finish_frame(gpu)?;
+        let world = &*world;
+        let tris = |pass: usize| -> u64 {
+            let per_request = self.requests.iter().enumerate().map(|(r, req)| {
+                req.draws
+                    .iter()
+                    .map(|d| world.listed(r, pass, d.group as usize) as u64 * d.triangles())
+                    .sum::<u64>()
+            });
+            per_request.sum()
+        };
+        let mut drawn: BTreeMap<String, u32> = BTreeMap::new();
+        for (r, req) in self.requests.iter().enumerate() {
+            let n: u32 = (0..world.groups(r)).map(|g| world.listed(r, 0, g)).sum();
+            *drawn.entry(req.technique.to_string()).or_default() += n;
+        }
+        let terrain = self.terrain.triangles();
+        let shadow = (1..=CASCADES)
+            .filter(|_| self.shadows_now)
+            .map(|p| terrain + tris(p))
+            .sum();
+        Ok((drawn, terrain + tris(0), shadow))
+    }
+
+    /// The last rendered frame as an sRGB image.    /// The last rendered frame as an sRGB image.
+    pub fn read_image(&self, gpu: &Gpu) -> Result<image::RgbaImage, RenderError> {
+        let Some(t) = &self.targets else {
+            return Err(RenderError::Option(
+                "this renderer draws into a caller's target: read the caller's attachment".into(),
+            ));
+        };
+        Ok(sylvan_gpu::read_rgba8(gpu, &t.output.color)?)
     }
 
     fn frame_uniforms(
         &self,
-        view: &View,
-        view_proj: Mat4,
+        fv: &FrameView,
         sun: &Sun,
         sun_dir: Vec3,
         shadows: bool,
         cascades: &[frame::Cascade; CASCADES],
     ) -> GpuFrame {
+        let (view, view_proj) = (&fv.view, fv.view_proj);
         let v4 = |c: [f32; 3], w: f32| [c[0], c[1], c[2], w];
         // Below the horizon the sun fades out instead of lighting from underneath.
         let sun_strength = (sun_dir.y * 10.0).clamp(0.0, 1.0);
@@ -641,9 +799,121 @@ impl Renderer {
                 1.0 / self.frame.shadow_resolution as f32,
                 0.0,
                 self.options.debug.code(),
-                self.pixels_per_metre(view),
+                fv.pixels_per_metre,
+            ],
+            target: [
+                self.frame.target.output.code(),
+                self.frame.target.far_depth(),
+                0.0,
+                0.0,
             ],
         }
+    }
+}
+
+// The embedding API: Sylvan's frame recorded into a caller's encoder and render pass.
+impl Renderer {
+    /// Records the part of a frame that must happen outside the caller's render pass, into
+    /// the caller's `encoder`: tile uploads and the GPU cull, each technique's per-frame
+    /// work, the frame uniforms (queue writes, so submit `encoder` on `gpu.queue`) and
+    /// Sylvan's shadow-cascade passes. Call once per frame before the caller's main pass,
+    /// then [`Renderer::draw`] inside it.
+    ///
+    /// The trees are culled and their level of detail chosen for `camera`; shadows are fitted
+    /// to its view up to the scene's far distance (an infinite projection is culled there).
+    pub fn prepare(
+        &mut self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        camera: &CameraMatrices,
+        sun: &Sun,
+    ) -> Result<PreparedFrame, RenderError> {
+        let fv = self.frame_view(camera)?;
+        if (camera.width, camera.height) != (self.options.width, self.options.height) {
+            self.resize(gpu, camera.width, camera.height)?;
+        }
+        self.record_prepare(gpu, encoder, &fv, sun)
+    }
+
+    /// Records `layers` into the caller's main pass (begun on attachments matching the
+    /// renderer's [`MainTarget`]), after [`Renderer::prepare`] of the same frame. It sets its
+    /// own pipelines and bind groups: set the caller's again before drawing more.
+    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, layers: Layers) -> DrawCounts {
+        let mut counts = DrawCounts::default();
+        pass.set_bind_group(0, &self.frame.main_bind, &[]);
+        if layers.sky {
+            counts.draw_calls += self.sky.draw(pass);
+        }
+        if layers.terrain {
+            counts.draw_calls += self.terrain.draw(pass, false);
+            counts.triangles += self.terrain.triangles();
+        }
+        if layers.trees {
+            let culled = self.world.as_ref().map(World::culled).unwrap_or_default();
+            let ctx = DrawContext {
+                pass: 0,
+                frame_bind: &self.frame.main_bind,
+                instances: &self.instances,
+                ranges: &self.instances.ranges[0],
+                culled: &culled,
+            };
+            counts += self.technique.draw(pass, &ctx);
+        }
+        counts
+    }
+
+    /// The attachments the main pass is built for (Sylvan's own, or the caller's).
+    pub fn target(&self) -> MainTarget {
+        self.frame.target
+    }
+
+    /// After a prepared frame's submission has completed: trees drawn per technique in the
+    /// camera view. Blocks until the GPU cull's counts are read back (a GPU-driven technique);
+    /// for tests and tools, not for every frame of an interactive program.
+    pub fn trees_drawn(&mut self, gpu: &Gpu) -> Result<BTreeMap<String, u32>, RenderError> {
+        if self.world.is_some() {
+            return Ok(self.read_world_counts(gpu)?.0);
+        }
+        Ok(self
+            .technique
+            .trees_drawn(&self.instances)
+            .into_iter()
+            .map(|(name, n)| (name.to_string(), n))
+            .collect())
+    }
+
+    /// The frame's view from a caller's matrices.
+    fn frame_view(&self, camera: &CameraMatrices) -> Result<FrameView, RenderError> {
+        let (p, v) = (camera.proj, camera.view);
+        let perspective = (p.z_axis.w + 1.0).abs() < 1e-4 && p.w_axis.w.abs() < 1e-4;
+        if !perspective || p.y_axis.y <= 0.0 || p.x_axis.x <= 0.0 {
+            return Err(RenderError::Option(
+                "camera projection: Sylvan needs a right-handed perspective projection (clip w = −view z), e.g. glam's perspective_rh or perspective_infinite_reverse_rh".into(),
+            ));
+        }
+        if camera.width == 0 || camera.height == 0 || !v.is_finite() || v.determinant() == 0.0 {
+            return Err(RenderError::Option(format!(
+                "camera: a {}x{} target and an invertible, finite view matrix are needed",
+                camera.width, camera.height
+            )));
+        }
+        let inv = v.inverse();
+        let eye = inv.w_axis.truncate();
+        let forward = -inv.z_axis.truncate().normalize_or(Vec3::NEG_Z);
+        let fov_y = 2.0 * (1.0 / p.y_axis.y).atan();
+        let view = View {
+            eye,
+            target: eye + forward,
+            fov_y,
+            aspect: p.y_axis.y / p.x_axis.x,
+            near: 0.25,
+            far: self.far,
+        };
+        Ok(FrameView {
+            view,
+            view_proj: p * v,
+            pixels_per_metre: pixels_per_metre(fov_y, camera.height),
+        })
     }
 }
 
@@ -655,9 +925,10 @@ impl Renderer {
         &self.options
     }
 
-    /// The output target (`OUTPUT_FORMAT`, the output size) that [`Renderer::render`] draws into.
-    pub fn output(&self) -> &RenderTarget {
-        &self.targets.output
+    /// The output target (`OUTPUT_FORMAT`, the output size) that [`Renderer::render`] draws
+    /// into; `None` for a renderer drawing into a caller's target.
+    pub fn output(&self) -> Option<&RenderTarget> {
+        self.targets.as_ref().map(|t| &t.output)
     }
 
     /// Sky and ambient colours from the next frame on.

@@ -27,6 +27,7 @@ impl SkyPass {
                 fs: Some("fs_sky"),
                 buffers: &[],
                 pass: PassKind::Main,
+                target: &frame.target,
                 cull: None,
                 depth_write: false,
                 blend: None,

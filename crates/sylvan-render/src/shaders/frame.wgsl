@@ -21,6 +21,9 @@ struct Frame {
     // x: shadow map texel size (1/resolution); y: time; z: debug view (`DebugView`); w: pixels
     // covered by one metre at one metre in the output image (height / (2 tan(fov_y / 2))).
     shadow_params: vec4<f32>,
+    // The main pass's target (`MainTarget`): x: colour output (0 radiance, 1 × exposure,
+    // 2 exposure + tone curve); y: depth of the far plane (0 reversed-Z, 1 standard).
+    main_target: vec4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -174,9 +177,34 @@ fn cascade_color(cascade: u32) -> vec3<f32> {
     }
 }
 
-// Applies the frame's debug view to a shaded colour at `world`. `technique` is the drawing
+// ACES filmic fit (Narkowicz 2015), the same curve as Sylvan's resolve.
+fn tone_curve(x: vec3<f32>) -> vec3<f32> {
+    return clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), vec3<f32>(0.0), vec3<f32>(1.0));
+}
+
+// A shaded linear radiance as the main target takes it (`frame.main_target.x`): as is for
+// Sylvan's own HDR target (its resolve exposes and tone-maps), exposed for a caller's HDR
+// target, exposed and tone-mapped for a caller's LDR target.
+fn target_output(color: vec3<f32>) -> vec3<f32> {
+    let mode = u32(frame.main_target.x + 0.5);
+    if (mode == 0u) {
+        return color;
+    }
+    let exposed = color * frame.sun_color.w;
+    if (mode == 1u) {
+        return exposed;
+    }
+    return tone_curve(exposed);
+}
+
+// Applies the frame's debug view to a shaded colour at `world`, then the target's output
+// mapping (`target_output`): every main-pass shader ends its colour here. `technique` is the drawing
 // technique's id (`TECHNIQUE_<NAME>`, from the registry), or -1 for terrain (drawn grey in the technique view).
 fn debug_tint(color: vec3<f32>, world: vec3<f32>, technique: i32) -> vec3<f32> {
+    return target_output(debug_colour(color, world, technique));
+}
+
+fn debug_colour(color: vec3<f32>, world: vec3<f32>, technique: i32) -> vec3<f32> {
     let mode = u32(frame.shadow_params.z + 0.5);
     let luma = dot(color, vec3<f32>(0.2126, 0.7152, 0.0722));
     if (mode == DEBUG_TECHNIQUE) {
@@ -202,7 +230,7 @@ fn debug_tint_lod(color: vec3<f32>, world: vec3<f32>, technique: i32, level: u32
     if (mode == DEBUG_TECHNIQUE) {
         let luma = dot(color, vec3<f32>(0.2126, 0.7152, 0.0722));
         let c = mix(technique_color(technique), vec3<f32>(1.0), min(f32(level) * 0.3, 0.75));
-        return c * (0.15 + 1.5 * luma);
+        return target_output(c * (0.15 + 1.5 * luma));
     }
     return debug_tint(color, world, technique);
 }

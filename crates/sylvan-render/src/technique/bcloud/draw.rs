@@ -407,6 +407,7 @@ impl BillboardCloud {
                     fs: Some(fs),
                     buffers: &buffers,
                     pass,
+                    target: &frame.target,
                     cull: None,
                     depth_write: true,
                     blend: None,

@@ -305,6 +305,7 @@ impl MeshPipelines {
                     fs,
                     buffers: &buffers,
                     pass,
+                    target: &frame.target,
                     cull,
                     depth_write: true,
                     blend: None,

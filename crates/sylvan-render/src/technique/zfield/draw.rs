@@ -219,6 +219,7 @@ impl ZField {
                     fs: Some(fs),
                     buffers: &buffers,
                     pass,
+                    target: &frame.target,
                     cull: None,
                     depth_write: true,
                     blend,

@@ -328,8 +328,9 @@ impl App {
         let (w, h) = r.presenter.size();
         r.viewer.sync(&r.gpu, w, h);
         if r.viewer.output_changed {
-            r.presenter
-                .bind_scene(&r.gpu, &r.viewer.renderer.output().color_view);
+            if let Some(out) = r.viewer.renderer.output() {
+                r.presenter.bind_scene(&r.gpu, &out.color_view);
+            }
             r.viewer.output_changed = false;
         }
         let camera = r.viewer.camera.camera();
@@ -505,7 +506,7 @@ impl App {
             r.records.iter().map(f).sum::<f64>() / r.records.len().max(1) as f64
         };
         let (mean_ms, mean_cpu_ms) = (mean(|f| f.ms), mean(|f| f.cpu_ms));
-        let out = r.viewer.renderer.output();
+        let out = r.viewer.renderer.options();
         let report = ViewReport {
             frames: r.frames,
             window: [r.presenter.size().0, r.presenter.size().1],

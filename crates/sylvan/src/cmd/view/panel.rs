@@ -152,7 +152,7 @@ fn upload_heatmap(ctx: &egui::Context, v: &Viewer, s: &mut UiState) {
 
 fn overlay(ui: &mut egui::Ui, v: &Viewer, s: &UiState, clock: &FrameClock) {
     let timer = clock.last.as_ref().map_or("gpu", |f| f.timer.as_str());
-    let out = v.renderer.output();
+    let out = v.renderer.options();
     let mut text = format!(
         "{:.1} ms {timer} · {:.1} ms cpu\n{}x{} · {}",
         clock.gpu_ms(),

@@ -153,7 +153,7 @@ impl Viewer {
             ((width as f32 * scale).round() as u32).max(1),
             ((height as f32 * scale).round() as u32).max(1),
         );
-        let before = (r.output().width, r.output().height);
+        let before = (r.options().width, r.options().height);
         if before != (w, h) {
             match r.resize(gpu, w, h) {
                 Ok(()) => self.output_changed = true,
@@ -213,8 +213,8 @@ impl Viewer {
     /// Makes a renderer for `scene` with the current settings; keeps the old one on error.
     fn replace_renderer(&mut self, gpu: &Gpu, scene: &Scene, plants: Vec<Plant>) -> bool {
         let mut options = self.base.clone();
-        options.width = self.renderer.output().width;
-        options.height = self.renderer.output().height;
+        options.width = self.renderer.options().width;
+        options.height = self.renderer.options().height;
         match make_renderer(gpu, scene, &plants, &options, &self.settings) {
             Ok(r) => {
                 self.renderer = r;
