@@ -11,7 +11,8 @@
 //!   render tests (`sylvan-render`) a second time on the GL backend (`WGPU_BACKEND=gl`), so
 //!   every backend Sylvan claims is tested; both drivers are installed when missing. The
 //!   viewer's tests (`crates/sylvan/tests/view_cli.rs`) open windows on their own `Xvfb`: when
-//!   `Xvfb` is missing, `test` installs `xvfb` with apt-get first.
+//!   `Xvfb` is missing, `test` installs `xvfb` with apt-get first. Last, the Bevy plugin
+//!   (`crates/sylvan-bevy`, its own workspace): fmt, clippy and its headless test on Vulkan.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
@@ -267,5 +268,36 @@ fn test() -> Result<(), String> {
         "--skip",
         "gl_bakes_and_draws_as_vulkan_does",
     ]);
-    run(gl, "WGPU_BACKEND=gl cargo test --package sylvan-render")
+    run(gl, "WGPU_BACKEND=gl cargo test --package sylvan-render")?;
+    bevy_plugin()
+}
+
+/// The Bevy plugin (`crates/sylvan-bevy`): fmt, clippy and its headless test. It is its own
+/// workspace, so Bevy is built only here (into `target/bevy`), and with
+/// `--ignore-rust-version`: Bevy 0.20 declares rustc 1.97.1 on its umbrella and `wesl`
+/// crates, and builds and renders on this repository's 1.95. Its test runs on Vulkan only:
+/// Bevy 0.20's own PBR shaders do not compile on Mesa's llvmpipe GL (`textureGatherOffset` on
+/// a `sampler2DShadow`), so Bevy cannot start there.
+fn bevy_plugin() -> Result<(), String> {
+    let dir = root().join("crates/sylvan-bevy");
+    let bevy = |args: &[&str]| {
+        let mut c = cargo();
+        c.current_dir(&dir).args(args);
+        c
+    };
+    run(
+        bevy(&["fmt", "--all", "--check"]),
+        "(crates/sylvan-bevy) cargo fmt --all --check",
+    )?;
+    let ignore = "--ignore-rust-version";
+    run(
+        bevy(&["clippy", ignore, "--all-targets", "--", "-D", "warnings"]),
+        "(crates/sylvan-bevy) cargo clippy --ignore-rust-version --all-targets -- -D warnings",
+    )?;
+    let mut test = bevy(&["test", ignore]);
+    test.env("WGPU_BACKEND", "vulkan");
+    run(
+        test,
+        "(crates/sylvan-bevy) WGPU_BACKEND=vulkan cargo test --ignore-rust-version",
+    )
 }

@@ -981,3 +981,10 @@ impl Renderer {
         self.technique.reallocations()
     }
 }
+
+// A renderer moves between threads (an engine's render thread, Bevy's render world keeps it
+// behind a mutex): every technique is `Send`.
+const _: fn() = || {
+    fn send<T: Send>() {}
+    send::<Renderer>();
+};

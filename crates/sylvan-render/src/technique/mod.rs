@@ -160,7 +160,7 @@ pub struct Built {
 /// The frame half of a technique. Object-safe: the renderer holds a `Box<dyn Technique>`.
 /// Per-tree techniques draw the instance lists they are handed; a technique that is a field
 /// over the terrain (BN12's shader-map) ignores them and draws its own geometry in the passes.
-pub trait Technique {
+pub trait Technique: Send {
     /// The registry name.
     fn name(&self) -> &'static str;
     /// Per-frame work before any pass: level-of-detail selection, uploads, and compute passes
