@@ -53,21 +53,34 @@ fn main() {
             std::process::exit(1);
         }
     };
-    for with_forest in [true, false] {
-        let (ms, cpu) = run(&forest, with_forest, w, h, frames);
+    for (with_forest, msaa) in [
+        (true, Msaa::Sample4),
+        (true, Msaa::Off),
+        (false, Msaa::Sample4),
+    ] {
+        let (ms, cpu) = run(&forest, with_forest, msaa, w, h, frames);
         println!(
-            "bevy {}: {w}x{h}, technique {technique}, {frames} frames — median {ms:.1} ms/frame (wall), plugin CPU median {cpu:.3} ms/frame",
+            "bevy {}, {}x MSAA: {w}x{h}, technique {technique}, {frames} frames — median {ms:.1} ms/frame (wall), plugin CPU median {cpu:.3} ms/frame",
             if with_forest {
                 "with the forest"
             } else {
                 "without it (Bevy's own frame)"
-            }
+            },
+            msaa.samples()
         );
     }
 }
 
-/// Median wall ms per frame and median plugin CPU ms, after 10 warm-up frames.
-fn run(forest: &Forest, with_forest: bool, w: u32, h: u32, frames: usize) -> (f64, f64) {
+/// Median wall ms per frame and median plugin CPU ms, after 5 warm-up frames, with the camera's
+/// `msaa`.
+fn run(
+    forest: &Forest,
+    with_forest: bool,
+    msaa: Msaa,
+    w: u32,
+    h: u32,
+    frames: usize,
+) -> (f64, f64) {
     let mut app = App::new();
     app.add_plugins((
         DefaultPlugins
@@ -104,6 +117,7 @@ fn run(forest: &Forest, with_forest: bool, w: u32, h: u32, frames: usize) -> (f6
                 Transform::from_translation(Vec3::from_array(cam.position.to_array()))
                     .looking_at(Vec3::from_array(cam.look_at.to_array()), Vec3::Y),
                 ForestCamera,
+                msaa,
             ));
         },
     );
@@ -113,7 +127,7 @@ fn run(forest: &Forest, with_forest: bool, w: u32, h: u32, frames: usize) -> (f6
     app.finish();
     app.cleanup();
     let (mut times, mut cpu) = (Vec::new(), Vec::new());
-    for i in 0..frames + 10 {
+    for i in 0..frames + 5 {
         let start = Instant::now();
         app.update();
         // Wait for the frame's GPU work, so the time is the whole frame.
@@ -124,7 +138,7 @@ fn run(forest: &Forest, with_forest: bool, w: u32, h: u32, frames: usize) -> (f6
             .wgpu_device()
             .poll(wgpu::PollType::wait_indefinitely());
         let ms = start.elapsed().as_secs_f64() * 1e3;
-        if i >= 10 {
+        if i >= 5 {
             times.push(ms);
             cpu.push(app.world().resource::<ForestStats>().last().cpu_ms);
         }

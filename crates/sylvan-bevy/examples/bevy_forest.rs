@@ -7,7 +7,7 @@
 //! ```
 //!
 //! Controls: W/A/S/D move, Q/E down/up, Shift faster, drag with the left mouse button to look
-//! around, Esc quits. `--screenshot PNG` saves the 30th frame and exits (for the README).
+//! around, Esc quits. `--screenshot PNG` saves the 10th frame and exits (for the README).
 //! With no scene it draws Sylvan's built-in forest.
 
 use bevy::input::mouse::AccumulatedMouseMotion;
@@ -96,8 +96,16 @@ fn setup(
     let cam = forest.scene().camera;
     let eye = Vec3::from_array(cam.position.to_array());
     let dir = (Vec3::from_array(cam.look_at.to_array()) - eye).normalize_or(Vec3::NEG_Z);
-    // A few Bevy meshes on the terrain in front of the camera.
-    let ahead = eye + Vec3::new(dir.x, 0.0, dir.z).normalize_or(Vec3::NEG_Z) * 25.0;
+    // A few Bevy meshes on the terrain where the view's centre meets it.
+    let mut ahead = eye + dir * 60.0;
+    for t in 1..4000 {
+        let p = eye + dir * t as f32 * 0.5;
+        if p.y < forest.height_at(p.x, p.z) {
+            ahead = p;
+            break;
+        }
+    }
+    let size = 2.0 + eye.distance(ahead) * 0.04;
     for (i, color) in [
         Color::srgb(0.8, 0.1, 0.1),
         Color::srgb(0.9, 0.8, 0.2),
@@ -106,16 +114,17 @@ fn setup(
     .into_iter()
     .enumerate()
     {
-        let side = Vec3::new(-dir.z, 0.0, dir.x).normalize_or(Vec3::X) * (i as f32 - 1.0) * 8.0;
+        let side =
+            Vec3::new(-dir.z, 0.0, dir.x).normalize_or(Vec3::X) * (i as f32 - 1.0) * size * 3.0;
         let p = ahead + side;
         let y = forest.height_at(p.x, p.z);
         commands.spawn((
-            Mesh3d(meshes.add(Cuboid::new(3.0, 3.0, 3.0))),
+            Mesh3d(meshes.add(Cuboid::new(size, size, size))),
             MeshMaterial3d(materials.add(StandardMaterial {
                 base_color: color,
                 ..default()
             })),
-            Transform::from_xyz(p.x, y + 1.5, p.z),
+            Transform::from_xyz(p.x, y + size * 0.5, p.z),
         ));
     }
     let sun = forest.scene().sun.direction();
@@ -207,12 +216,12 @@ fn screenshot(
         return;
     };
     *frames += 1;
-    if *frames == 30 {
+    if *frames == 10 {
         commands
             .spawn(Screenshot::primary_window())
             .observe(save_to_disk(path.clone()));
     }
-    if *frames == 40 {
+    if *frames == 14 {
         exit.write(AppExit::Success);
     }
 }

@@ -185,6 +185,111 @@ impl Forest {
     }
 }
 
+/// A forest described from the Bevy side: a terrain (extent, sample grid and a height function
+/// — the one the app's own ground mesh uses) and species (a Sylvan preset name or a plant
+/// file, a height range, trees per hectare), seeded over the terrain tile by tile as a scene
+/// file's `method = "tiled"` placement is.
+///
+/// ```no_run
+/// let forest = sylvan_bevy::ForestBuilder::new([2000.0, 2000.0], [129, 129], |x, z| {
+///     12.0 * (x * 0.004).sin() * (z * 0.003).cos()
+/// })
+/// .species("pine", "pine", [14.0, 22.0], 150.0)
+/// .species("birch-ish", "prunus", [6.0, 10.0], 40.0)
+/// .build()
+/// .expect("forest");
+/// ```
+pub struct ForestBuilder {
+    scene: Scene,
+    layouts: Vec<sylvan_scene::SpeciesLayout>,
+    seed: u64,
+}
+
+impl ForestBuilder {
+    /// A terrain of `size` metres (X, Z) sampled on `resolution` points (each ≥ 2) of
+    /// `height(x, z)`, with the built-in scene's sun, sky and camera.
+    pub fn new(size: [f32; 2], resolution: [u32; 2], height: impl Fn(f32, f32) -> f32) -> Self {
+        let [nx, nz] = resolution.map(|n| n.max(2));
+        let mut heights = Vec::with_capacity((nx * nz) as usize);
+        for r in 0..nz {
+            for c in 0..nx {
+                let x = size[0] * c as f32 / (nx - 1) as f32;
+                let z = size[1] * r as f32 / (nz - 1) as f32;
+                heights.push(height(x, z));
+            }
+        }
+        let mut scene = Scene::builtin_default();
+        scene.terrain = sylvan_scene::Terrain {
+            size,
+            resolution: [nx, nz],
+            heights,
+        };
+        scene.species.clear();
+        scene.trees.clear();
+        scene.seeded = None;
+        scene.source = None;
+        scene.camera = sylvan_scene::Camera::overview(&scene.terrain);
+        Self {
+            scene,
+            layouts: Vec::new(),
+            seed: 1,
+        }
+    }
+
+    /// Adds a species: `plant` is a preset name (`sylvan plant --list`) or a `.lsys`, `.glb`,
+    /// `.gltf` or `.obj` path; heights uniform in `height_m`; `per_hectare` trees per hectare.
+    pub fn species(
+        mut self,
+        name: &str,
+        plant: &str,
+        height_m: [f32; 2],
+        per_hectare: f32,
+    ) -> Self {
+        let source = if sylvan_plant::PRESETS.contains(&plant) {
+            sylvan_scene::PlantSource::Preset(plant.into())
+        } else {
+            sylvan_scene::PlantSource::File(plant.into())
+        };
+        self.layouts.push(sylvan_scene::SpeciesLayout {
+            species: self.scene.species.len() as u32,
+            height_m,
+            density: sylvan_scene::Density::PerHectare(per_hectare),
+        });
+        self.scene.species.push(sylvan_scene::Species {
+            name: name.into(),
+            plant: source,
+            height_m,
+        });
+        self
+    }
+
+    /// The placement seed (the same seed, the same trees).
+    pub fn seed(mut self, seed: u64) -> Self {
+        self.seed = seed;
+        self
+    }
+
+    /// The sun used by [`ForestLighting::Scene`] (and when there is no `DirectionalLight`).
+    pub fn sun(mut self, sun: Sun) -> Self {
+        self.scene.sun = sun;
+        self
+    }
+
+    /// Places the species and loads their plants.
+    pub fn build(mut self) -> Result<Forest, ForestError> {
+        if self.scene.species.is_empty() {
+            return Err(ForestError(
+                "a forest needs at least one species — call ForestBuilder::species".into(),
+            ));
+        }
+        self.scene.seeded =
+            sylvan_scene::SeededForest::new(self.scene.terrain.size, &self.layouts, self.seed, &[])
+                .map_err(|e| ForestError(e.to_string()))?
+                .map(Arc::new);
+        Forest::from_scene(self.scene)
+    }
+}
+
 /// Where the forest's sun and sky come from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum ForestLighting {

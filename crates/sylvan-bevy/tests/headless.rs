@@ -357,3 +357,24 @@ fn bevy_draws_the_forest_as_sylvan_does_and_depth_tests_against_its_meshes() {
         inside - red - kept
     );
 }
+
+#[test]
+fn a_forest_described_from_the_bevy_side_is_seeded_over_its_terrain() {
+    let forest =
+        sylvan_bevy::ForestBuilder::new([1000.0, 800.0], [65, 65], |x, z| 0.01 * x + 0.02 * z)
+            .species("pine", "pine", [14.0, 20.0], 100.0)
+            .species("bush", "bush", [1.0, 2.0], 20.0)
+            .build()
+            .expect("forest");
+    let scene = forest.scene();
+    assert_eq!(scene.species.len(), 2);
+    // 80 ha × 120 trees/ha, as the tiled placement expects it.
+    let expected = scene.estimated_trees();
+    assert!((8_000.0..11_500.0).contains(&expected), "{expected} trees");
+    assert!((forest.height_at(500.0, 400.0) - 13.0).abs() < 0.01);
+    let err = sylvan_bevy::ForestBuilder::new([10.0, 10.0], [2, 2], |_, _| 0.0)
+        .build()
+        .err()
+        .expect("no species");
+    assert!(err.to_string().contains("at least one species"), "{err}");
+}
