@@ -234,15 +234,20 @@ fn bevy_frame(
 #[derive(Resource)]
 struct ShotTarget(Handle<Image>);
 
-fn pixel_of(scene: &Scene, p: glam::Vec3) -> (u32, u32) {
-    let view = sylvan_render::frame::View {
+/// The scene camera's view at the test's size (as Sylvan's renderer makes it).
+fn scene_view(scene: &Scene) -> sylvan_render::frame::View {
+    sylvan_render::frame::View {
         eye: scene.camera.position,
         target: scene.camera.look_at,
         fov_y: scene.camera.fov_deg.to_radians(),
         aspect: W as f32 / H as f32,
         near: 0.25,
         far: 5000.0,
-    };
+    }
+}
+
+fn pixel_of(scene: &Scene, p: glam::Vec3) -> (u32, u32) {
+    let view = scene_view(scene);
     let c = view.view_proj() * p.extend(1.0);
     let x = ((c.x / c.w * 0.5 + 0.5) * W as f32) as u32;
     let y = ((0.5 - c.y / c.w * 0.5) * H as f32) as u32;
@@ -251,14 +256,7 @@ fn pixel_of(scene: &Scene, p: glam::Vec3) -> (u32, u32) {
 
 /// Whether the ray through pixel (x, y)'s centre meets the cube (slab test).
 fn ray_hits_cube(scene: &Scene, x: u32, y: u32) -> bool {
-    let view = sylvan_render::frame::View {
-        eye: scene.camera.position,
-        target: scene.camera.look_at,
-        fov_y: scene.camera.fov_deg.to_radians(),
-        aspect: W as f32 / H as f32,
-        near: 0.25,
-        far: 5000.0,
-    };
+    let view = scene_view(scene);
     let inv = view.view_proj().inverse();
     let ndc = glam::Vec2::new(
         (x as f32 + 0.5) / W as f32 * 2.0 - 1.0,

@@ -583,12 +583,7 @@ impl Renderer {
             },
             trees_drawn: match trees_drawn_gpu {
                 Some(d) => d,
-                None => self
-                    .technique
-                    .trees_drawn(&self.instances)
-                    .into_iter()
-                    .map(|(name, n)| (name.to_string(), n))
-                    .collect(),
+                None => self.listed_trees_drawn(),
             },
             triangles: main_counts.triangles,
             shadow_triangles: shadow_counts.triangles,
@@ -874,12 +869,17 @@ impl Renderer {
         if self.world.is_some() {
             return Ok(self.read_world_counts(gpu)?.0);
         }
-        Ok(self
-            .technique
+        Ok(self.listed_trees_drawn())
+    }
+
+    /// Trees drawn per technique from the CPU-culled instance lists (a renderer without the
+    /// tiled world).
+    fn listed_trees_drawn(&self) -> BTreeMap<String, u32> {
+        self.technique
             .trees_drawn(&self.instances)
             .into_iter()
             .map(|(name, n)| (name.to_string(), n))
-            .collect())
+            .collect()
     }
 
     /// The frame's view from a caller's matrices.

@@ -375,20 +375,7 @@ fn standard_depth_with_msaa_matches_reversed_depth() {
         (4, DepthConvention::Standard),
     ] {
         let host = Host::new(&gpu, samples, depth);
-        let mut r = Renderer::for_target(
-            &gpu,
-            &scene,
-            &plants,
-            &options("geometry"),
-            host.target,
-            &mut |_, _, _| {},
-        )
-        .expect("embedded renderer");
-        let view = own_view(&r, &scene.camera);
-        let camera = match depth {
-            DepthConvention::Reversed => reversed(&view),
-            DepthConvention::Standard => standard(&view),
-        };
+        let (mut r, camera) = embedded_geometry(&gpu, &scene, &plants, &host, depth);
         pictures.push(host.frame(
             &gpu,
             &mut r,
@@ -403,6 +390,32 @@ fn standard_depth_with_msaa_matches_reversed_depth() {
     eprintln!("standard Z + 4× MSAA vs reversed Z, 1 sample: ꟻLIP {f:.4}");
     // Only antialiased edges may differ.
     assert!(f < 0.05, "standard-Z MSAA frame differs: ꟻLIP {f:.4}");
+}
+
+/// A `geometry` renderer for `host`'s target, and the scene camera's matrices in `depth`'s
+/// convention.
+fn embedded_geometry(
+    gpu: &Gpu,
+    scene: &Scene,
+    plants: &[sylvan_plant::Plant],
+    host: &Host,
+    depth: DepthConvention,
+) -> (Renderer, CameraMatrices) {
+    let r = Renderer::for_target(
+        gpu,
+        scene,
+        plants,
+        &options("geometry"),
+        host.target,
+        &mut |_, _, _| {},
+    )
+    .expect("embedded renderer");
+    let view = own_view(&r, &scene.camera);
+    let camera = match depth {
+        DepthConvention::Reversed => reversed(&view),
+        DepthConvention::Standard => standard(&view),
+    };
+    (r, camera)
 }
 
 /// World-space triangles of an axis-aligned vertical wall `z = z0` over `x0..x1`, `y0..y1`.
@@ -430,20 +443,7 @@ fn caller_geometry_and_trees_hide_each_other() {
     };
     for depth in [DepthConvention::Reversed, DepthConvention::Standard] {
         let host = Host::new(&gpu, 4, depth);
-        let mut r = Renderer::for_target(
-            &gpu,
-            &scene,
-            &plants,
-            &options("geometry"),
-            host.target,
-            &mut |_, _, _| {},
-        )
-        .expect("embedded renderer");
-        let view = own_view(&r, &scene.camera);
-        let camera = match depth {
-            DepthConvention::Reversed => reversed(&view),
-            DepthConvention::Standard => standard(&view),
-        };
+        let (mut r, camera) = embedded_geometry(&gpu, &scene, &plants, &host, depth);
         // Trees alone over two clear colours: a pixel equal in both is wholly a tree's, one
         // that keeps its clear colour in both is background.
         let over_magenta = host.frame(
