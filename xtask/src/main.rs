@@ -48,7 +48,26 @@ fn cargo() -> Command {
     let mut c = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
     c.current_dir(root());
     quiet_driver_noise(&mut c);
+    // A CI build is never rebuilt in place: incremental state would only take disk.
+    if std::env::var_os("CI").is_some() && std::env::var_os("CARGO_INCREMENTAL").is_none() {
+        c.env("CARGO_INCREMENTAL", "0");
+    }
     c
+}
+
+/// Prints the free space where the build goes (CI disks are small; a full one crashes the
+/// linker with SIGBUS rather than saying so).
+fn report_disk(when: &str) {
+    if let Ok(out) = Command::new("df")
+        .args(["-h", "--output=avail"])
+        .arg(root())
+        .output()
+    {
+        let text = String::from_utf8_lossy(&out.stdout);
+        if let Some(avail) = text.lines().nth(1) {
+            eprintln!("xtask: {} free on the build disk {when}", avail.trim());
+        }
+    }
 }
 
 /// Mesa/Vulkan print `XDG_RUNTIME_DIR is invalid` without one; give children a private one.
@@ -236,6 +255,7 @@ fn demo() -> Result<(), String> {
 }
 
 fn test() -> Result<(), String> {
+    report_disk("before the tests");
     let mut fmt = cargo();
     fmt.args(["fmt", "--all", "--check"]);
     run(fmt, "cargo fmt --all --check")?;
@@ -269,7 +289,10 @@ fn test() -> Result<(), String> {
         "gl_bakes_and_draws_as_vulkan_does",
     ]);
     run(gl, "WGPU_BACKEND=gl cargo test --package sylvan-render")?;
-    bevy_plugin()
+    report_disk("after the workspace tests");
+    bevy_plugin()?;
+    report_disk("after the Bevy plugin's tests");
+    Ok(())
 }
 
 /// The Bevy plugin (`crates/sylvan-bevy`): fmt, clippy and its headless test. It is its own
