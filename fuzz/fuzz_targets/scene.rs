@@ -6,7 +6,7 @@ use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
     if let Ok(text) = std::str::from_utf8(data) {
-        sylvan_scene::fuzzing::scene(text);
+        let _ = sylvan_scene::fuzzing::scene(text);
         sylvan_scene::fuzzing::camera_path(text);
     }
 });

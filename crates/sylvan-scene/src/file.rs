@@ -6,7 +6,7 @@ use crate::error::{ErrorKind, Location, SceneError};
 use crate::heightmap::{Purpose, read_gray};
 use crate::params::{LodBand, Origin, ParamValue, Setting};
 use crate::placement::{
-    MAX_TREES, Placement, PlacementError, PlacementMethod, SeededForest, place_trees,
+    MAX_TREES, Placement, PlacementError, PlacementMethod, SeededForest, place_trees_within,
 };
 use crate::species::{Growth, RawSpecies, build_species};
 use crate::terrain::{MAX_TERRAIN_SIZE_M, ProceduralTerrain};
@@ -280,7 +280,9 @@ pub(crate) fn toml_error(e: &toml::de::Error, text: &str, path: &Path) -> SceneE
 
 /// Parse and build a scene from `text`, read from `path` (used in messages and to resolve
 /// relative paths).
-pub(crate) fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
+/// Builds a scene from `text`, placing at most `tree_limit` trees at load (capped by
+/// [`MAX_TREES`]).
+pub(crate) fn parse_scene(text: &str, path: &Path, tree_limit: usize) -> Result<Scene, SceneError> {
     let raw: RawScene = toml::from_str(text).map_err(|e| toml_error(&e, text, path))?;
     let cx = Ctx { text, path };
     if raw.species.len() > MAX_SPECIES {
@@ -323,16 +325,18 @@ pub(crate) fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> 
         // Tiled worlds are produced tile by tile by the renderer, never all at once here.
         PlacementMethod::Tiled => SeededForest::new(terrain.size, &layouts, placement.seed, &fixed)
             .and_then(|forest| {
-                if fixed.len() > MAX_TREES {
+                let limit = tree_limit.min(MAX_TREES);
+                if fixed.len() > limit {
                     return Err(PlacementError::TooManyTrees {
                         estimated: fixed.len() as f64,
-                        limit: MAX_TREES as f64,
+                        limit: limit as f64,
                     });
                 }
                 Ok((fixed, forest.map(Arc::new)))
             }),
         PlacementMethod::Poisson => {
-            place_trees(&terrain, &layouts, &placement, &fixed).map(|p| (p.trees, None))
+            place_trees_within(&terrain, &layouts, &placement, &fixed, tree_limit)
+                .map(|p| (p.trees, None))
         }
     };
     let (trees, seeded) = match placed {
@@ -767,6 +771,6 @@ impl Scene {
     /// Build a scene from TOML `text` as if read from `path`: `path` names the file in errors
     /// and relative paths resolve against its folder.
     pub fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
-        parse_scene(text, path)
+        parse_scene(text, path, MAX_TREES)
     }
 }

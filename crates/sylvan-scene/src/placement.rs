@@ -242,12 +242,25 @@ pub fn place_trees(
     placement: &Placement,
     fixed: &[TreeInstance],
 ) -> Result<Placed, PlacementError> {
+    place_trees_within(terrain, layouts, placement, fixed, MAX_TREES)
+}
+
+/// [`place_trees`] with a lower tree limit than [`MAX_TREES`] (the fuzz entry points use one,
+/// so that a valid scene of a million trees is not mistaken for a hang under a sanitizer).
+pub(crate) fn place_trees_within(
+    terrain: &Terrain,
+    layouts: &[SpeciesLayout],
+    placement: &Placement,
+    fixed: &[TreeInstance],
+    limit: usize,
+) -> Result<Placed, PlacementError> {
+    let limit = limit.min(MAX_TREES);
     let size = terrain.size;
     let estimated = estimate_trees(size, layouts) + fixed.len() as f64;
-    if estimated > MAX_TREES as f64 {
+    if estimated > limit as f64 {
         return Err(PlacementError::TooManyTrees {
             estimated,
-            limit: MAX_TREES as f64,
+            limit: limit as f64,
         });
     }
     let mut trees = Vec::with_capacity(fixed.len() + (estimated * 1.05) as usize + 16);
@@ -300,10 +313,10 @@ pub fn place_trees(
             radius
         }
     };
-    if trees.len() > MAX_TREES {
+    if trees.len() > limit {
         return Err(PlacementError::TooManyTrees {
             estimated: trees.len() as f64,
-            limit: MAX_TREES as f64,
+            limit: limit as f64,
         });
     }
     Ok(Placed {

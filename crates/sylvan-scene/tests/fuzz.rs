@@ -38,3 +38,19 @@ proptest! {
         }
     }
 }
+
+/// The fuzz entry point refuses a valid scene that would place more than its tree limit (the
+/// 2 km default terrain at 2,024 pines/ha under `poisson`: 810k trees, over libFuzzer's 10 s
+/// under AddressSanitizer), quickly and with the usual one-line message.
+#[test]
+fn fuzz_entry_point_caps_the_trees_it_places() {
+    let text = "[placement]\nmethod = \"poisson\"\n[[species]]\npreset = \"pine\"\ndensity_per_ha = 2024\n";
+    let err = sylvan_scene::fuzzing::scene(text).expect_err("over the fuzz tree limit");
+    let s = err.to_string();
+    assert!(s.contains("20000") || s.contains("20,000"), "{s}");
+    assert!(!s.contains('\n'), "{s}");
+    // A small scene still parses through the same entry point.
+    let small = "[terrain]\nprocedural = { seed = 1, size_m = 100, relief_m = 5 }\n[placement]\nmethod = \"poisson\"\n[[species]]\npreset = \"pine\"\ndensity_per_ha = 50\n";
+    let scene = sylvan_scene::fuzzing::scene(small).expect("a small scene parses");
+    assert!(!scene.trees.is_empty());
+}
