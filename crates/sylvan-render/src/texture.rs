@@ -174,8 +174,8 @@ pub fn upload_as(
 /// The shortest side of a leaf image's last mip level ([`cutout_mips_to`]), for single leaves
 /// and leaf cards alike. A leaf card's chain used to run down to 1×1, where its
 /// coverage-preserving mean is a faint smear the alpha test drops: far or small trees lost
-/// every leaf at 1 spp (pines at 192×144: ꟻLIP vs 16 spp 0.0329 → 0.0259 with this floor, a
-/// far crop 0.196 → 0.103).
+/// every leaf at 1 spp (BENCHMARKS.md, "Leaf mips": trees-1k at 192×108, 1-spp `geometry`
+/// ꟻLIP vs 16 spp 0.0338 → 0.0260).
 pub const LEAF_MIN_MIP: u32 = 4;
 
 /// Checks a plant's leaf texture against its data and the device, and uploads it with

@@ -279,9 +279,7 @@ pub(crate) fn toml_error(e: &toml::de::Error, text: &str, path: &Path) -> SceneE
 }
 
 /// Parse and build a scene from `text`, read from `path` (used in messages and to resolve
-/// relative paths).
-/// Builds a scene from `text`, placing at most `tree_limit` trees at load (capped by
-/// [`MAX_TREES`]).
+/// relative paths), placing at most `tree_limit` trees at load (capped by [`MAX_TREES`]).
 pub(crate) fn parse_scene(text: &str, path: &Path, tree_limit: usize) -> Result<Scene, SceneError> {
     let raw: RawScene = toml::from_str(text).map_err(|e| toml_error(&e, text, path))?;
     let cx = Ctx { text, path };
