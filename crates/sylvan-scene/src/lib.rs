@@ -32,7 +32,8 @@ pub use path::{CameraKey, CameraPath, Interpolation};
 pub use placement::{
     DEFAULT_DENSITY_PER_HA, Density, DensityMap, MAX_DENSITY_PER_HA, MAX_PATTERN_POINTS, MAX_TREES,
     MAX_WORLD_TREES, Placed, Placement, PlacementError, PlacementMethod, SeededForest,
-    SpeciesLayout, estimate_trees, peak_per_ha, place_trees, poisson_disk, poisson_tile,
+    SpeciesLayout, estimate_trees, pattern_radius_m, peak_per_ha, place_trees, poisson_disk,
+    poisson_tile,
 };
 pub use species::{MAX_TREE_HEIGHT_M, PRESETS};
 pub use terrain::{

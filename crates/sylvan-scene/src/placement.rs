@@ -284,7 +284,7 @@ pub(crate) fn place_trees_within(
                     min_spacing_m: 0.0,
                 });
             }
-            let radius = (PACKING / peak).sqrt();
+            let radius = pattern_radius_m(peak);
             let area = size[0] as f64 * size[1] as f64;
             let estimated = PATTERN_DENSITY * area / (radius as f64 * radius as f64);
             if estimated > MAX_PATTERN_POINTS as f64 {
@@ -414,7 +414,7 @@ impl SeededForest {
         if peak <= 0.0 {
             return Ok(None);
         }
-        let radius = (PACKING / peak).sqrt();
+        let radius = pattern_radius_m(peak);
         let tile = (radius * (TILE_POINTS / PATTERN_DENSITY as f32).sqrt()).max(4.0 * radius);
         let mut pattern = poisson_tile(tile, radius, Rng::new(seed).next_u64());
         let rho = pattern.len() as f64 / (tile as f64 * tile as f64);
@@ -432,6 +432,11 @@ impl SeededForest {
                 radius,
             ),
         }))
+    }
+
+    /// The density-driven species it places.
+    pub fn layouts(&self) -> &[SpeciesLayout] {
+        &self.layouts
     }
 
     /// Minimum distance between its trees (and from them to the fixed trees), metres.
@@ -501,6 +506,12 @@ impl SeededForest {
             }
         }
     }
+}
+
+/// The Poisson pattern radius (minimum spacing) for a forest whose densest part has
+/// `peak_per_m2` trees per m²: the candidates then number about 1.17 × the peak density.
+pub fn pattern_radius_m(peak_per_m2: f32) -> f32 {
+    (PACKING / peak_per_m2).sqrt()
 }
 
 /// Bridson's Poisson-disk sampling over `[0, size[0]] × [0, size[1]]`: no two points closer than

@@ -493,3 +493,60 @@ fn band_tables_and_set_reach_the_technique() {
         closed["triangles"]
     );
 }
+
+#[test]
+fn bake_measures_and_caches_shadermap_tables_for_a_scene() {
+    let dir = workdir("bake_tables");
+    let scene = tiny_scene(&dir);
+    let c = dir.join("cache");
+    let args = [
+        "bake",
+        "--technique",
+        "shadermap",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--cache-dir",
+        c.to_str().unwrap(),
+        "--set",
+        "zfield.order=3",
+        "--set",
+        "zfield.tile=32",
+        "--set",
+        "shadermap.theta=4",
+        "--set",
+        "shadermap.phi=3",
+        "--set",
+        "shadermap.lambda=3",
+        "--set",
+        "shadermap.patch_px=64",
+        "--json",
+    ];
+    let first = json_of(&sylvan(&args, &dir));
+    assert_eq!(first["species"], "bush");
+    assert_eq!(first["from_cache"], false);
+    assert_eq!(first["renders"], 2 * (1 + 2 * 3));
+    let gd = first["gd_by_lambda"].as_array().unwrap();
+    assert_eq!(gd.len(), 3);
+    // The top view of the densest node sees less ground than no trees at all.
+    assert!(gd[2][0].as_f64().unwrap() < 1.0 && gd[0][0].as_f64().unwrap() == 1.0);
+    let again = json_of(&sylvan(&args, &dir));
+    assert_eq!(again["from_cache"], true);
+    assert_eq!(again["gd_by_lambda"], first["gd_by_lambda"]);
+    // A bad table key and a plant where a scene is wanted are one-line errors.
+    let out = sylvan(
+        &[
+            "bake",
+            "--technique",
+            "shadermap",
+            "--set",
+            "shadermap.theta=1",
+        ],
+        &dir,
+    );
+    assert_one_line_error(&out, &["theta 1", "3 to 32"]);
+    let out = sylvan(
+        &["bake", "--technique", "shadermap", "--preset", "pine"],
+        &dir,
+    );
+    assert_one_line_error(&out, &["--scene"]);
+}

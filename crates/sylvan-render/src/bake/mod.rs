@@ -409,7 +409,7 @@ pub enum CachePolicy {
 /// How one plant's asset was obtained.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BakeReport {
-    /// Plant name.
+    /// Plant name (for a species mix, the file stem naming its species).
     pub plant: String,
     /// Read from the cache (no GPU work).
     pub from_cache: bool,
@@ -545,35 +545,56 @@ pub fn load_or_bake<B: Bake>(
     params
         .validate()
         .map_err(|why| RenderError::Param(format!("{}: {why}", B::NAME)))?;
-    let start = std::time::Instant::now();
     let key = cache::CacheKey {
         technique: B::NAME.to_string(),
         format_version: B::FORMAT_VERSION,
         hash: cache_key::<B>(plant, params),
     };
+    load_or_compute(
+        &plant.name,
+        &key,
+        policy,
+        |a: &B::Asset| {
+            B::check(a, plant).map_err(|e| format!("payload does not fit the plant: {e}"))
+        },
+        || B::bake(gpu, plant, params, progress),
+    )
+}
+
+/// The cache round of every baked asset ([`load_or_bake`] for one plant, `shadermap`'s tables
+/// for a species mix): the file `<stem>-<technique>-<hash>.sylbake` (or `policy`'s) read,
+/// verified (container, key, checksum, then `check` on the decoded payload) and returned; else
+/// `compute` runs and its result is written atomically. A stale, truncated or corrupt file is
+/// reported in [`BakeReport::stale`] and replaced; an unwritable cache folder is a warning
+/// (the asset is used from memory) unless `policy` names the file.
+pub fn load_or_compute<A: codec::Codec>(
+    stem: &str,
+    key: &cache::CacheKey,
+    policy: &CachePolicy,
+    check: impl Fn(&A) -> Result<(), String>,
+    compute: impl FnOnce() -> Result<A, RenderError>,
+) -> Result<(A, BakeReport), RenderError> {
+    let start = std::time::Instant::now();
     let path = match policy {
-        CachePolicy::Default => {
-            Some(cache::default_dir().join(cache::file_name(&plant.name, &key)))
-        }
-        CachePolicy::Dir(d) => Some(d.join(cache::file_name(&plant.name, &key))),
+        CachePolicy::Default => Some(cache::default_dir().join(cache::file_name(stem, key))),
+        CachePolicy::Dir(d) => Some(d.join(cache::file_name(stem, key))),
         CachePolicy::File(f) => Some(f.clone()),
         CachePolicy::Off => None,
     };
     let mut stale = None;
     if let Some(p) = &path {
-        match cache::read(p, &key) {
-            cache::Lookup::Hit(payload) => match <B::Asset as codec::Codec>::decode(&payload)
+        match cache::read(p, key) {
+            cache::Lookup::Hit(payload) => match A::decode(&payload)
                 .map_err(|e| format!("payload does not decode: {e}"))
                 .and_then(|a| {
-                    B::check(&a, plant)
-                        .map_err(|e| format!("payload does not fit the plant: {e}"))?;
+                    check(&a)?;
                     Ok(a)
                 }) {
                 Ok(baked) => {
                     return Ok((
                         baked,
                         BakeReport {
-                            plant: plant.name.clone(),
+                            plant: stem.to_string(),
                             from_cache: true,
                             ms: start.elapsed().as_secs_f64() * 1e3,
                             path: path.clone(),
@@ -588,10 +609,10 @@ pub fn load_or_bake<B: Bake>(
             cache::Lookup::Stale(why) => stale = Some(why),
         }
     }
-    let baked = B::bake(gpu, plant, params, progress)?;
-    let payload = codec::Codec::encode(&baked);
+    let baked = compute()?;
+    let payload = baked.encode();
     if let Some(p) = &path
-        && let Err(e) = cache::write(p, &key, &payload)
+        && let Err(e) = cache::write(p, key, &payload)
     {
         let what = format!(
             "{}: cannot write the bake cache: {e} — set SYLVAN_CACHE_DIR to a writable folder",
@@ -606,7 +627,7 @@ pub fn load_or_bake<B: Bake>(
     Ok((
         baked,
         BakeReport {
-            plant: plant.name.clone(),
+            plant: stem.to_string(),
             from_cache: false,
             ms: start.elapsed().as_secs_f64() * 1e3,
             path,

@@ -34,6 +34,7 @@ pub mod lod;
 pub mod octahedral;
 pub mod params;
 pub mod registry;
+pub mod shadermap;
 pub mod zfield;
 
 use crate::RenderError;

@@ -16,9 +16,13 @@ pub struct BakeCmdArgs {
     /// A built-in plant: pine, prunus, bush, chestnut or beech.
     #[arg(long, value_name = "NAME", conflicts_with = "source")]
     pub preset: Option<String>,
-    /// The technique to bake for (`sylvan params` lists them).
+    /// The technique to bake for (`sylvan params` lists them); `shadermap` measures BN12's
+    /// ground tables for a scene's forest (`--scene`, default the built-in scene).
     #[arg(long, default_value = "boxtree")]
     pub technique: String,
+    /// With `--technique shadermap`: the scene whose species mix the tables are for.
+    #[arg(long, value_name = "SCENE.toml")]
+    pub scene: Option<PathBuf>,
     /// Write the baked asset to this file instead of the cache folder.
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,
@@ -34,6 +38,12 @@ pub struct BakeCmdArgs {
 
 /// Runs `sylvan bake`.
 pub fn run(args: BakeCmdArgs) -> anyhow::Result<()> {
+    if args.technique == "shadermap" {
+        return tables(args);
+    }
+    if args.scene.is_some() {
+        bail!("--scene is for --technique shadermap — bake a plant with SOURCE or --preset");
+    }
     let entry = registry::find(&args.technique)?;
     let Some(bake) = entry.bake else {
         let bakers: Vec<&str> = registry::REGISTRY
@@ -105,6 +115,78 @@ pub fn run(args: BakeCmdArgs) -> anyhow::Result<()> {
                 "read from cache"
             } else {
                 "baked"
+            },
+            r.ms,
+            file.map(|f| format!(" → {f}")).unwrap_or_default()
+        );
+    }
+    Ok(())
+}
+
+/// `sylvan bake --technique shadermap [--scene FILE]`: the `zfield` bakes of the scene's
+/// species, then BN12's ground tables for its mix.
+fn tables(args: BakeCmdArgs) -> anyhow::Result<()> {
+    if args.source.is_some() || args.preset.is_some() {
+        bail!(
+            "--technique shadermap bakes for a scene's species mix, not one plant — pass --scene FILE (or nothing for the built-in scene)"
+        );
+    }
+    let settings = args.bake.settings()?;
+    let scene = super::common::load_scene(args.scene.as_deref())?;
+    let plants = sylvan_render::load_plants(&scene)?;
+    let policy = match &args.out {
+        Some(f) => CachePolicy::File(f.clone()),
+        None => args.bake.cache(),
+    };
+    let gpu = sylvan_gpu::Gpu::new()?;
+    let bar = BakeBar::new();
+    let (t, r) = sylvan_render::technique::shadermap::bake_scene(
+        &gpu,
+        &scene,
+        &plants,
+        &settings,
+        &policy,
+        &mut |what, d, n| bar.update(what, d, n),
+    )
+    .context("baking the shadermap tables")?;
+    bar.finish();
+    let file = r.path.as_ref().map(|p| p.display().to_string());
+    let renders = (1 + (t.theta - 2) * t.phi) as usize * (t.lambdas.len() - 1);
+    if args.json {
+        let nt = t.theta as usize;
+        let mut json = serde_json::json!({
+            "technique": "shadermap",
+            "species": r.plant,
+            "from_cache": r.from_cache,
+            "bake_ms": r.ms,
+            "file": file,
+            "file_bytes": r.path.as_ref().and_then(|p| std::fs::metadata(p).ok()).map_or(0, |m| m.len()),
+            "tables": {"theta": t.theta, "phi": t.phi, "lambda": t.lambdas.len()},
+            "renders": renders,
+            "samples": t.samples,
+            "lambdas_per_m2": t.lambdas,
+            "crown_area_m2": t.crown_area_m2,
+            "h": t.h,
+            "gd_by_lambda": t.gd.chunks(nt).collect::<Vec<_>>(),
+            "d_by_lambda": t.d,
+        });
+        if let (Some(obj), Some(why)) = (json.as_object_mut(), &r.stale) {
+            obj.insert("rebaked_because".into(), why.clone().into());
+        }
+        println!("{json}");
+    } else {
+        println!(
+            "shadermap tables for {}: 𝔾 {}×{}×{}×{} ({} renders), {} in {:.0} ms{}",
+            r.plant,
+            t.theta,
+            t.theta,
+            t.phi,
+            t.lambdas.len(),
+            renders,
+            if r.from_cache {
+                "read from cache"
+            } else {
+                "measured"
             },
             r.ms,
             file.map(|f| format!(" → {f}")).unwrap_or_default()

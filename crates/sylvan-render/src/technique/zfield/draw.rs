@@ -80,12 +80,23 @@ fn view_frames(grid: HemiGrid) -> Vec<GpuZView> {
         .collect()
 }
 
-impl ZField {
-    /// Uploads every species' views into the atlases and builds the pipelines.
-    /// `density` is the tree density Λ_h of eq. 9 (trees per m²).
-    pub fn new(
+/// `zfield`'s bind group 1 (`bindings.wgsl`): every species' atlases, the grid's view frames
+/// and the parameters, uploaded once. Shared by the technique's passes and by the passes that
+/// measure z-field forest patches (`shadermap`'s tables).
+pub(crate) struct ZFieldBindings {
+    /// The group's layout.
+    pub(crate) layout: wgpu::BindGroupLayout,
+    /// The group.
+    pub(crate) bind: wgpu::BindGroup,
+    /// GPU bytes of the atlases and buffers.
+    pub(crate) bytes: u64,
+}
+
+impl ZFieldBindings {
+    /// Uploads every species' views into the atlases. `density` is the tree density Λ_h of
+    /// eq. 9 (trees per m²).
+    pub(crate) fn upload(
         gpu: &Gpu,
-        frame: &FrameResources,
         plants: &[Plant],
         baked: &[ZFieldBaked],
         bake: &ZFieldBakeParams,
@@ -206,6 +217,37 @@ impl ZField {
                 params_buffer.as_entire_binding(),
             ],
         );
+        let static_bytes = color.bytes
+            + normal.bytes
+            + zfield.bytes
+            + species_buffer.size()
+            + view_buffer.size()
+            + params_buffer.size();
+        Ok(Self {
+            layout: bind_layout,
+            bind,
+            bytes: static_bytes,
+        })
+    }
+}
+
+impl ZField {
+    /// Uploads every species' views into the atlases and builds the pipelines.
+    /// `density` is the tree density Λ_h of eq. 9 (trees per m²).
+    pub fn new(
+        gpu: &Gpu,
+        frame: &FrameResources,
+        plants: &[Plant],
+        baked: &[ZFieldBaked],
+        bake: &ZFieldBakeParams,
+        draw: &ZFieldDrawParams,
+        density: f32,
+    ) -> Result<Self, RenderError> {
+        let ZFieldBindings {
+            layout: bind_layout,
+            bind,
+            bytes: static_bytes,
+        } = ZFieldBindings::upload(gpu, plants, baked, bake, draw, density)?;
         let module = sylvan_gpu::shader(gpu, "zfield", &super::shader_source());
         let buffers = [None, Some(GpuTreeInstance::LAYOUT)];
         let build = |label, vs, fs, pass, layouts: &[&wgpu::BindGroupLayout], blend| {
@@ -255,12 +297,6 @@ impl ZField {
             &[&frame.shadow_layout, &bind_layout],
             None,
         );
-        let static_bytes = color.bytes
-            + normal.bytes
-            + zfield.bytes
-            + species_buffer.size()
-            + view_buffer.size()
-            + params_buffer.size();
         Ok(Self {
             pipeline,
             shadow_pipeline,

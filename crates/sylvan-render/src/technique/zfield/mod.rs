@@ -87,6 +87,7 @@ mod draw;
 
 pub use bake::{ZFieldBake, ZFieldBaked, ZView};
 pub use draw::ZField;
+pub(crate) use draw::ZFieldBindings;
 
 use super::Built;
 use super::params::{self, ParamDoc, ParamTable};

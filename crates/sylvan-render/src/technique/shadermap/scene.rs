@@ -1,0 +1,152 @@
+//! A scene's forest as the tables see it: its species mix (weights, heights), pattern radius
+//! and peak density, and the tables baked for it (`sylvan bake --technique shadermap`).
+
+use super::measure::{ForestMix, MixSpecies, load_or_measure};
+use super::{GroundTables, ShaderMapBakeParams};
+use crate::RenderError;
+use crate::bake::{BakeReport, CachePolicy, load_or_bake};
+use crate::technique::params::{NoParams, resolve};
+use crate::technique::zfield::{ZFieldBake, ZFieldBakeParams, ZFieldDrawParams};
+use sylvan_plant::Plant;
+use sylvan_scene::{Scene, Setting};
+
+/// One species of a scene's mix: its index in `Scene::species`, share and height range.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneSpecies {
+    /// Index into `Scene::species` (and the plants).
+    pub species: usize,
+    /// Its share of the trees (mean density or count).
+    pub weight: f32,
+    /// Heights, metres.
+    pub height_m: [f32; 2],
+}
+
+/// A scene's forest for the tables.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneMix {
+    /// The species with trees.
+    pub species: Vec<SceneSpecies>,
+    /// Poisson pattern radius, metres.
+    pub radius_m: f32,
+    /// Peak density, trees per m².
+    pub lambda_max: f32,
+}
+
+/// Most cells per side of the grid the peak density of placed trees is taken over, and the
+/// smallest cell side, metres (a cell holds a stand, not one tree).
+const PEAK_CELLS: usize = 32;
+const PEAK_CELL_M: f32 = 50.0;
+
+/// The mix of `scene`: from its density-driven species when it has them (mean densities as
+/// weights, the layouts' heights, the forest's own pattern radius and peak), else from its
+/// placed trees (counts, height extremes, the densest cell of a grid of cells of at least
+/// 50 m, at most 32 × 32).
+pub fn scene_mix(scene: &Scene) -> Result<SceneMix, RenderError> {
+    if let Some(seeded) = &scene.seeded {
+        let layouts = seeded.layouts();
+        let species: Vec<SceneSpecies> = layouts
+            .iter()
+            .filter(|l| l.density.mean_per_ha() > 0.0)
+            .map(|l| SceneSpecies {
+                species: l.species as usize,
+                weight: l.density.mean_per_ha(),
+                height_m: l.height_m,
+            })
+            .collect();
+        if !species.is_empty() {
+            return Ok(SceneMix {
+                species,
+                radius_m: seeded.min_spacing_m(),
+                lambda_max: sylvan_scene::peak_per_ha(layouts) * 1e-4,
+            });
+        }
+    }
+    if scene.trees.is_empty() {
+        return Err(RenderError::Option(
+            "the scene has no trees — shadermap tables are measured for a scene's forest".into(),
+        ));
+    }
+    let mut species: Vec<SceneSpecies> = Vec::new();
+    for t in &scene.trees {
+        let s = t.species as usize;
+        match species.iter_mut().find(|x| x.species == s) {
+            Some(x) => {
+                x.weight += 1.0;
+                x.height_m = [x.height_m[0].min(t.height), x.height_m[1].max(t.height)];
+            }
+            None => species.push(SceneSpecies {
+                species: s,
+                weight: 1.0,
+                height_m: [t.height, t.height],
+            }),
+        }
+    }
+    let [sx, sz] = scene.terrain.size.map(|v| v.max(1.0));
+    let n = |s: f32| ((s / PEAK_CELL_M) as usize).clamp(1, PEAK_CELLS);
+    let (nx, nz) = (n(sx), n(sz));
+    let mut cells = vec![0u32; nx * nz];
+    for t in &scene.trees {
+        let cx = ((t.position.x / sx * nx as f32).max(0.0) as usize).min(nx - 1);
+        let cz = ((t.position.z / sz * nz as f32).max(0.0) as usize).min(nz - 1);
+        cells[cz * nx + cx] += 1;
+    }
+    let cell_m2 = sx * sz / (nx * nz) as f32;
+    let lambda_max = *cells.iter().max().unwrap_or(&1) as f32 / cell_m2;
+    Ok(SceneMix {
+        species,
+        radius_m: sylvan_scene::pattern_radius_m(lambda_max),
+        lambda_max,
+    })
+}
+
+/// The tables for `scene` (plants: one per species): the `zfield` bakes of its species (read
+/// or baked, `zfield.*` settings apply), then the tables (`shadermap.*` settings).
+pub fn bake_scene(
+    gpu: &sylvan_gpu::Gpu,
+    scene: &Scene,
+    plants: &[Plant],
+    settings: &[Setting],
+    policy: &CachePolicy,
+    progress: &mut dyn FnMut(&str, usize, usize),
+) -> Result<(GroundTables, BakeReport), RenderError> {
+    let of =
+        |name: &str| -> Vec<&Setting> { settings.iter().filter(|s| s.technique == name).collect() };
+    let (params, _) = resolve::<ShaderMapBakeParams, NoParams>("shadermap", &of("shadermap"))?;
+    let (zbake, _) = resolve::<ZFieldBakeParams, ZFieldDrawParams>("zfield", &of("zfield"))?;
+    let mix = scene_mix(scene)?;
+    let mut zfields = Vec::with_capacity(mix.species.len());
+    for s in &mix.species {
+        let plant = plants
+            .get(s.species)
+            .ok_or_else(|| RenderError::Plant(format!("species {} has no plant", s.species)))?;
+        let (z, _) = load_or_bake::<ZFieldBake>(gpu, plant, &zbake, policy, &mut |d, t| {
+            progress(&plant.name, d, t)
+        })?;
+        zfields.push(z);
+    }
+    let forest = ForestMix {
+        species: mix
+            .species
+            .iter()
+            .zip(&zfields)
+            .map(|(s, z)| MixSpecies {
+                plant: &plants[s.species],
+                zfield: z,
+                weight: s.weight,
+                height_m: s.height_m,
+            })
+            .collect(),
+        zfield_bake: zbake,
+        radius_m: mix.radius_m,
+        lambda_max: mix.lambda_max,
+    };
+    load_or_measure(gpu, &forest, &params, policy, &mut |d, t| {
+        progress("shadermap tables", d, t)
+    })
+}
+
+/// Checks `shadermap.*` settings without a GPU (the tables are not a registered technique
+/// yet, so the registry's check defers to this).
+pub fn check_settings(settings: &[&Setting]) -> Result<(), RenderError> {
+    resolve::<ShaderMapBakeParams, NoParams>("shadermap", settings).map(|_| ())
+}

@@ -1,0 +1,270 @@
+//! `shadermap`'s ground tables (BN12 §6, eq. 14–15, 18–19), measured by rendering z-field
+//! forest patches: on opaque spheres (a synthetic z-field of known shape) the top view sees
+//! `1 − λA` of the ground, looking into the sun sees less lit ground than with the sun behind
+//! (the hotspot), view and light swap without changing 𝔾, everything falls with density and
+//! zenith, and 𝔻 is the cosine-weighted diagonal; on a real plant's bake the tables are cached,
+//! read back equal, and re-measured when the file is damaged. Tiny tables; lavapipe and GL.
+
+mod common;
+
+use common::gpu;
+use glam::Vec3;
+use sylvan_render::bake::CachePolicy;
+use sylvan_render::bake::image::TileLevel;
+use sylvan_render::directions::HemiGrid;
+use sylvan_render::technique::shadermap::{
+    ForestMix, GroundTables, MixSpecies, ShaderMapBakeParams, load_or_measure, measure_ground,
+};
+use sylvan_render::technique::zfield::{ZFieldBake, ZFieldBakeParams, ZFieldBaked, ZView};
+
+fn zfield_params() -> ZFieldBakeParams {
+    ZFieldBakeParams {
+        order: 3,
+        tile: 32,
+        supersample: 2,
+        ..Default::default()
+    }
+}
+
+fn small_tables() -> ShaderMapBakeParams {
+    ShaderMapBakeParams {
+        theta: 5,
+        phi: 3,
+        lambda: 4,
+        patch_radii: 12,
+        patch_px: 128,
+        seed: 3,
+    }
+}
+
+/// Every view an opaque disk of `fraction` of the frame's half side about its centre: an
+/// opaque sphere of radius `fraction · radius` at the frame centre.
+fn sphere_asset(fraction: f32) -> ZFieldBaked {
+    let p = zfield_params();
+    let grid = HemiGrid::new(p.order).unwrap();
+    let tree = common::test_tree();
+    let (min, max) = (Vec3::from(tree.bbox_min), Vec3::from(tree.bbox_max));
+    let sizes: Vec<usize> = (0..=p.tile.ilog2())
+        .map(|m| (p.tile >> m) as usize)
+        .collect();
+    let alpha = |n: usize| -> Vec<u8> {
+        let mut a = vec![0u8; n * n];
+        let r = fraction * n as f32 * 0.5;
+        // 4×4 samples per texel: the disk's coverage, as a box-filtered mip would hold it.
+        for y in 0..n {
+            for x in 0..n {
+                let mut inside = 0;
+                for sy in 0..4 {
+                    for sx in 0..4 {
+                        let dx = x as f32 + (sx as f32 + 0.5) / 4.0 - n as f32 * 0.5;
+                        let dy = y as f32 + (sy as f32 + 0.5) / 4.0 - n as f32 * 0.5;
+                        inside += (dx * dx + dy * dy <= r * r) as u32;
+                    }
+                }
+                a[y * n + x] = (inside * 255 / 16) as u8;
+            }
+        }
+        a
+    };
+    let view = ZView {
+        levels: sizes
+            .iter()
+            .map(|&n| TileLevel {
+                size: n as u32,
+                color: alpha(n)
+                    .iter()
+                    .flat_map(|&a| [a / 3, a / 2, a / 4, a])
+                    .collect(),
+                normal: [128, 255, 128, 128].repeat(n * n),
+            })
+            .collect(),
+        zfield: sizes
+            .iter()
+            .map(|&n| {
+                alpha(n)
+                    .iter()
+                    .flat_map(|&a| [a / 4, (a as u16 * 3 / 4) as u8, a, a])
+                    .collect()
+            })
+            .collect(),
+    };
+    ZFieldBaked {
+        order: p.order,
+        tile: p.tile,
+        centre: ((min + max) * 0.5).to_array(),
+        radius: (max - min).length() * 0.5,
+        views: vec![view; grid.len()],
+    }
+}
+
+fn mix<'a>(
+    plant: &'a sylvan_plant::Plant,
+    z: &'a ZFieldBaked,
+    radius_m: f32,
+    lambda_max: f32,
+) -> ForestMix<'a> {
+    ForestMix {
+        species: vec![MixSpecies {
+            plant,
+            zfield: z,
+            weight: 1.0,
+            height_m: [plant.bbox_max[1], plant.bbox_max[1]],
+        }],
+        zfield_bake: zfield_params(),
+        radius_m,
+        lambda_max,
+    }
+}
+
+/// Ground fraction visible at (λ node, θv, θl, φ) nodes.
+fn g(t: &GroundTables, l: usize, v: usize, s: usize, m: usize) -> f32 {
+    t.g_node(l, v, s, m)
+}
+
+#[test]
+fn opaque_spheres_give_the_analytic_top_view_and_a_hotspot() {
+    let gpu = gpu();
+    let tree = common::test_tree();
+    let z = sphere_asset(0.5);
+    let sphere_r = 0.5 * z.radius;
+    // Pattern radius over two sphere radii: crowns never overlap, so from straight above
+    // the ground seen is exactly 1 − λA.
+    let spacing = 2.2 * sphere_r;
+    let forest = mix(&tree, &z, spacing, 1.0);
+    let p = small_tables();
+    let t = measure_ground(&gpu, &forest, &p, &mut |_, _| {}).unwrap();
+    t.check().unwrap();
+    let disk = std::f32::consts::PI * sphere_r * sphere_r;
+    assert!(
+        (t.crown_area_m2 - disk).abs() < 0.03 * disk,
+        "crown area {} m², the sphere's disk {disk} m²",
+        t.crown_area_m2
+    );
+    // A sphere's crown is as tall as it is wide: h = 2 within the leaf mesh's extent.
+    let (nt, np, nl) = (t.theta as usize, t.phi as usize, t.lambdas.len());
+    for l in 0..nl {
+        let expected = 1.0 - t.lambdas[l] * disk;
+        let got = t.gd_node(l, 0);
+        assert!(
+            (got - expected).abs() < 0.015,
+            "λ {:.4}/m²: top view sees {got}, 1 − λA = {expected}",
+            t.lambdas[l]
+        );
+        // Falls with zenith; 90° sees no ground through trees.
+        for v in 1..nt {
+            assert!(
+                t.gd_node(l, v) <= t.gd_node(l, v - 1) + 0.005,
+                "λ node {l}: Gd rises from θ node {} to {v}: {:?}",
+                v - 1,
+                &t.gd[l * nt..(l + 1) * nt]
+            );
+        }
+        assert_eq!(t.gd_node(l, nt - 1), if l == 0 { 1.0 } else { 0.0 });
+        // Swapping view and light keeps 𝔾 (the patch is isotropic; a few % of noise).
+        for v in 0..nt - 1 {
+            for s in 0..nt - 1 {
+                for m in 0..np {
+                    let (a, b) = (g(&t, l, v, s, m), g(&t, l, s, v, m));
+                    assert!(
+                        (a - b).abs() < 0.03,
+                        "λ node {l} θ nodes {v}/{s} φ node {m}: {a} vs swapped {b}"
+                    );
+                    assert!(a <= t.gd_node(l, v).min(t.gd_node(l, s)) + 1e-6);
+                }
+            }
+        }
+    }
+    for l in 1..nl {
+        // Denser forests hide more ground, at every zenith.
+        for v in 0..nt - 1 {
+            assert!(
+                t.gd_node(l, v) < t.gd_node(l - 1, v),
+                "λ node {l} θ node {v}"
+            );
+        }
+        // The hotspot: with the sun behind the viewer (φ = 0) the ground seen is lit where it
+        // is seen; looking into the sun (φ = 180°) much of it is in shadow.
+        let v = nt / 2;
+        let (behind, facing) = (g(&t, l, v, v, 0), g(&t, l, v, v, np - 1));
+        assert_eq!(behind, t.gd_node(l, v));
+        assert!(
+            facing < 0.8 * behind,
+            "λ node {l}: lit ground seen {behind} with the sun behind, {facing} facing it"
+        );
+        // 𝔻 is the cosine-weighted diagonal: 1 without trees, falling with density, between
+        // the top view's and the grazing views'.
+        assert!(t.d[l] < t.d[l - 1] && t.d[l] < t.gd_node(l, 0) && t.d[l] > 0.0);
+        assert!((t.d[l] - t.integrate_d(l, 256)).abs() < 2e-3);
+    }
+    assert_eq!(t.d[0], 1.0);
+}
+
+#[test]
+fn tables_of_a_real_plant_are_cached_and_remeasured_when_damaged() {
+    let gpu = gpu();
+    let tree = common::test_tree();
+    let zp = zfield_params();
+    let (z, _) = sylvan_render::bake::load_or_bake::<ZFieldBake>(
+        &gpu,
+        &tree,
+        &zp,
+        &CachePolicy::Off,
+        &mut |_, _| {},
+    )
+    .unwrap();
+    let dir = std::env::temp_dir().join(format!("sylvan-shadermap-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let policy = CachePolicy::Dir(dir.clone());
+    let forest = mix(&tree, &z, 7.0, 0.01);
+    let p = small_tables();
+    let (first, report) = load_or_measure(&gpu, &forest, &p, &policy, &mut |_, _| {}).unwrap();
+    assert!(!report.from_cache);
+    let path = report.path.clone().unwrap();
+    assert!(
+        path.file_name()
+            .unwrap()
+            .to_str()
+            .unwrap()
+            .contains("-shadermap-"),
+        "{path:?}"
+    );
+    let (again, report) = load_or_measure(&gpu, &forest, &p, &policy, &mut |_, _| {}).unwrap();
+    assert!(report.from_cache);
+    assert_eq!(again, first);
+    // The leafy test tree hides some ground, and more with density.
+    let nl = first.lambdas.len();
+    assert!(first.gd_node(nl - 1, 0) < 0.95 && first.gd_node(nl - 1, 0) > 0.3);
+    assert!(first.d[nl - 1] < first.d[1]);
+    // A flipped byte in the payload: the checksum fails, the tables are measured again.
+    let mut bytes = std::fs::read(&path).unwrap();
+    let at = bytes.len() - 9;
+    bytes[at] ^= 0x5a;
+    std::fs::write(&path, &bytes).unwrap();
+    let (third, report) = load_or_measure(&gpu, &forest, &p, &policy, &mut |_, _| {}).unwrap();
+    assert!(!report.from_cache && report.stale.is_some());
+    assert_eq!(third, first);
+    // Another seed is another patch, so another file.
+    let reseeded = ShaderMapBakeParams {
+        seed: 4,
+        ..p.clone()
+    };
+    let (_, report) = load_or_measure(&gpu, &forest, &reseeded, &policy, &mut |_, _| {}).unwrap();
+    assert!(!report.from_cache);
+    // Bad inputs are one-line errors, not panics.
+    let bad = ShaderMapBakeParams {
+        theta: 2,
+        ..small_tables()
+    };
+    let e = load_or_measure(&gpu, &forest, &bad, &policy, &mut |_, _| {}).unwrap_err();
+    assert!(e.to_string().contains("theta 2"), "{e}");
+    let e = load_or_measure(
+        &gpu,
+        &mix(&tree, &z, 7.0, f32::NAN),
+        &p,
+        &policy,
+        &mut |_, _| {},
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("peak density"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
