@@ -1,8 +1,9 @@
 //! BN12's shader-map (Bruneton & Neyret, *Real-time Realistic Rendering and Lighting of
 //! Forests*, 2012), the far end of the `auto` chain — **in progress**: this module holds what
-//! is built of it so far, the first half of §6's precomputed tables. It is not a technique yet
-//! (not in the registry, no `--technique shadermap`); `docs/plans/shadermap.md` is the plan and
-//! says what comes next.
+//! is built of it so far, the first half of §6's precomputed tables. It draws nothing yet: it
+//! is not in the registry (`render --technique shadermap` is an unknown technique), and only
+//! `sylvan bake --technique shadermap [--scene FILE]` measures its tables.
+//! `docs/plans/shadermap.md` is the plan and says what comes next.
 //!
 //! **Built** ([`measure`], [`tables`]): the ground tables of §6 — 𝔾(θv, θl, φ, λ), the fraction
 //! of ground seen from the view that the sun also reaches (eq. 14), its diagonal 𝔾(θ, θ, 0, λ)
