@@ -13,9 +13,11 @@ use sylvan_render::bake::CachePolicy;
 use sylvan_render::bake::image::TileLevel;
 use sylvan_render::directions::HemiGrid;
 use sylvan_render::technique::shadermap::{
-    ForestMix, GroundTables, MixSpecies, ShaderMapBakeParams, load_or_measure, measure_ground,
+    ForestMix, MixSpecies, ShaderMapBakeParams, ShaderMapTables, load_or_measure, measure_tables,
 };
-use sylvan_render::technique::zfield::{ZFieldBake, ZFieldBakeParams, ZFieldBaked, ZView};
+use sylvan_render::technique::zfield::{
+    ZFieldBake, ZFieldBakeParams, ZFieldBaked, ZFieldDrawParams, ZView,
+};
 
 fn zfield_params() -> ZFieldBakeParams {
     ZFieldBakeParams {
@@ -111,13 +113,14 @@ fn mix<'a>(
             height_m: [plant.bbox_max[1], plant.bbox_max[1]],
         }],
         zfield_bake: zfield_params(),
+        zfield_draw: ZFieldDrawParams::default(),
         radius_m,
         lambda_max,
     }
 }
 
 /// Ground fraction visible at (λ node, θv, θl, φ) nodes.
-fn g(t: &GroundTables, l: usize, v: usize, s: usize, m: usize) -> f32 {
+fn g(t: &ShaderMapTables, l: usize, v: usize, s: usize, m: usize) -> f32 {
     t.g_node(l, v, s, m)
 }
 
@@ -132,7 +135,7 @@ fn opaque_spheres_give_the_analytic_top_view_and_a_hotspot() {
     let spacing = 2.2 * sphere_r;
     let forest = mix(&tree, &z, spacing, 1.0);
     let p = small_tables();
-    let t = measure_ground(&gpu, &forest, &p, &mut |_, _| {}).unwrap();
+    let t = measure_tables(&gpu, &forest, &p, &mut |_, _| {}).unwrap();
     t.check().unwrap();
     let disk = std::f32::consts::PI * sphere_r * sphere_r;
     assert!(
@@ -197,6 +200,63 @@ fn opaque_spheres_give_the_analytic_top_view_and_a_hotspot() {
         assert!((t.d[l] - t.integrate_d(l, 256)).abs() < 2e-3);
     }
     assert_eq!(t.d[0], 1.0);
+    // 𝕋 with zfield's default lighting (τ = 2, the phase half-way to the leaf response at
+    // the baked normal, here straight up: up to (1 + 1/0.34)/2 ≈ 1.97 under a zenith sun): at
+    // the hotspot every tree point seen is lit from its own side; facing the sun the light
+    // crosses the crown first.
+    for l in 1..nl {
+        for v in 0..nt - 1 {
+            let hot = t.t_node(l, v, v, 0);
+            assert!(
+                hot > 0.5 && hot <= 1.98,
+                "λ node {l} θ node {v}: 𝕋 at the hotspot {hot}"
+            );
+        }
+        let v = nt / 2;
+        let (behind, facing) = (t.t_node(l, v, v, 0), t.t_node(l, v, v, np - 1));
+        assert!(
+            facing < 0.9 * behind,
+            "λ node {l}: 𝕋 {behind} with the sun behind, {facing} facing it"
+        );
+        // 𝔼: δ = 1 on these crowns, so it is the cylindrical hole alone, below 1 and falling
+        // with density.
+        for v in 0..nt {
+            let e = t.e_node(l, v);
+            assert!(e > 0.3 && e < 1.0, "λ node {l} θ node {v}: 𝔼 {e}");
+            if l > 1 {
+                assert!(
+                    e < t.e_node(l - 1, v) + 0.01,
+                    "λ node {l} θ node {v}: 𝔼 rises"
+                );
+            }
+        }
+    }
+    // Without extinction and with the isotropic phase (BN12's own model), a tree point is lit
+    // unless another tree shades it: 1 at the hotspot, and from straight above with the sun
+    // straight above.
+    let bn12 = ForestMix {
+        zfield_draw: ZFieldDrawParams {
+            tau: 0.0,
+            normal_weight: 0.0,
+            ..ZFieldDrawParams::default()
+        },
+        ..mix(&tree, &z, spacing, 1.0)
+    };
+    let u = measure_tables(&gpu, &bn12, &p, &mut |_, _| {}).unwrap();
+    assert_eq!(u.g, t.g, "𝔾 does not depend on the trees' lighting");
+    for l in 1..nl {
+        for v in 0..nt - 1 {
+            let hot = u.t_node(l, v, v, 0);
+            assert!((hot - 1.0).abs() < 0.01, "λ node {l} θ node {v}: 𝕋 {hot}");
+        }
+        // Away from the hotspot some points seen are in other trees' shadows (most with the
+        // sun to the side: BN12's model lights a point where the light enters its crown).
+        let side = u.t_node(l, nt - 2, nt - 2, np / 2);
+        assert!(
+            side < 0.95,
+            "λ node {l}: 𝕋 at 67.5° with the sun to the side {side}"
+        );
+    }
 }
 
 #[test]

@@ -524,7 +524,10 @@ fn bake_measures_and_caches_shadermap_tables_for_a_scene() {
     let first = json_of(&sylvan(&args, &dir));
     assert_eq!(first["species"], "bush");
     assert_eq!(first["from_cache"], false);
-    assert_eq!(first["renders"], 2 * (1 + 2 * 3));
+    // Per non-empty density node: a light map per direction (the zenith, 3 × 3 others) and a
+    // G-buffer per view zenith (4).
+    assert_eq!(first["renders"], 2 * (1 + 3 * 3 + 4));
+    assert_eq!(first["evaluations"], 2 * 4 * (1 + 3 * 3) * 64 * 64);
     let gd = first["gd_by_lambda"].as_array().unwrap();
     assert_eq!(gd.len(), 3);
     // The top view of the densest node sees less ground than no trees at all.

@@ -140,6 +140,7 @@ fn tables(args: BakeCmdArgs) -> anyhow::Result<()> {
     };
     let gpu = sylvan_gpu::Gpu::new()?;
     let bar = BakeBar::new();
+    let params = sylvan_render::technique::shadermap::scene::params(&settings)?;
     let (t, r) = sylvan_render::technique::shadermap::bake_scene(
         &gpu,
         &scene,
@@ -151,7 +152,7 @@ fn tables(args: BakeCmdArgs) -> anyhow::Result<()> {
     .context("baking the shadermap tables")?;
     bar.finish();
     let file = r.path.as_ref().map(|p| p.display().to_string());
-    let renders = (1 + (t.theta - 2) * t.phi) as usize * (t.lambdas.len() - 1);
+    let (renders, evaluations) = sylvan_render::technique::shadermap::measure::work(&params);
     if args.json {
         let nt = t.theta as usize;
         let mut json = serde_json::json!({
@@ -163,6 +164,7 @@ fn tables(args: BakeCmdArgs) -> anyhow::Result<()> {
             "file_bytes": r.path.as_ref().and_then(|p| std::fs::metadata(p).ok()).map_or(0, |m| m.len()),
             "tables": {"theta": t.theta, "phi": t.phi, "lambda": t.lambdas.len()},
             "renders": renders,
+            "evaluations": evaluations,
             "samples": t.samples,
             "lambdas_per_m2": t.lambdas,
             "crown_area_m2": t.crown_area_m2,
@@ -176,7 +178,7 @@ fn tables(args: BakeCmdArgs) -> anyhow::Result<()> {
         println!("{json}");
     } else {
         println!(
-            "shadermap tables for {}: 𝔾 {}×{}×{}×{} ({} renders), {} in {:.0} ms{}",
+            "shadermap tables for {}: 𝔾 and 𝕋 {}×{}×{}×{} ({} renders), {} in {:.0} ms{}",
             r.plant,
             t.theta,
             t.theta,

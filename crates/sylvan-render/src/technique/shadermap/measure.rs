@@ -1,21 +1,21 @@
-//! Measuring the ground tables by rendering z-field forest patches (BN12 §6, "the functions
-//! 𝔾, 𝕋, 𝔻, 𝔼 are precomputed by rendering forest patches").
+//! Measuring the tables by rendering z-field forest patches (BN12 §6, "the functions 𝔾, 𝕋,
+//! 𝔻, 𝔼 are precomputed by rendering forest patches").
 //!
 //! The patch is a periodic Poisson tile of side `patch_radii · r` (`r` the scene's pattern
 //! radius), thinned per density node with nested thresholds (every tree of a sparser node is in
 //! the denser ones), species drawn by the mix's weights, heights uniform in each species'
 //! range, rotations and tints random. For every direction of the table's grid
-//! (`1 + (θ − 2) · φ` of them: the zenith, and 90° is analytic: no ground is seen through an
-//! endless forest) the patch is drawn with `zfield`'s own atlases and vertex shader through a
-//! sheared ground-aligned orthographic projection (pixel (i, j) is ground texel (i, j) in every
-//! direction, and copies of the tile cover the wrap-around exactly) into a mask of the ground
-//! texels some tree hides (`measure.wgsl`). The masks are read back once per batch and the
-//! tables are bit counts: `Gd(θ) = |visible(θ, 0)| / N`, `G(θv, θl, φ) = |visible(θv, 0) ∧
-//! visible(θl, φ)| / N`. A view mask is the light mask of the same direction, so view and light
-//! share one set of renders.
+//! (`1 + (θ − 1) · φ` of them) the patch is drawn with `zfield`'s own atlases and vertex shader
+//! through a sheared ground-aligned orthographic projection (pixel (i, j) is ground texel (i, j)
+//! in every direction, and copies of the tile cover the wrap-around exactly), writing the
+//! highest tree point along each texel's ray (`measure.wgsl`): G-buffers for the view
+//! directions (those of φ = 0), light maps for all. `measure_eval` then sums, per (view,
+//! light) pair, the ground texels seen and lit (𝔾; the diagonal and the view's ground seen give
+//! Gd) and the sunlight reaching each tree sample (𝕋), and per view the sky reaching it (𝔼);
+//! the sums are read back once per density node. 𝔻 is the quadrature of the diagonal.
 
 use super::ShaderMapBakeParams;
-use super::tables::{GroundTables, real_zenith};
+use super::tables::{ShaderMapTables, real_zenith};
 use crate::RenderError;
 use crate::bake::codec::Fnv64;
 use crate::bake::{BakeReport, CachePolicy, cache};
@@ -34,7 +34,7 @@ use wgpu::util::DeviceExt;
 /// Name of the tables in the cache (`<species>-shadermap-<hash>.sylbake`).
 pub const NAME: &str = "shadermap";
 /// Version of the tables' payload and of the measurement; bump when either changes.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 /// Most trees in one patch (before the copies that cover the wrap-around).
 pub const MAX_PATCH_TREES: usize = 20_000;
 /// Directions steeper than this are measured at it (the sheared projection degenerates at
@@ -60,6 +60,9 @@ pub struct ForestMix<'a> {
     pub species: Vec<MixSpecies<'a>>,
     /// The `zfield` bake parameters all of them were baked with.
     pub zfield_bake: ZFieldBakeParams,
+    /// The `zfield` draw parameters the trees are lit with (`tau`, `opacity_scaled_tau` and
+    /// `normal_weight` enter 𝕋; the others are applied at run time).
+    pub zfield_draw: ZFieldDrawParams,
     /// The Poisson pattern radius `r` (the scene's minimum spacing), metres.
     pub radius_m: f32,
     /// The densest forest to tabulate, trees per m² (the scene's peak).
@@ -189,18 +192,25 @@ pub fn table_key(mix: &ForestMix<'_>, params: &ShaderMapBakeParams) -> u64 {
         h.write(&zkey.to_le_bytes())
             .f32s(&[s.weight, s.height_m[0], s.height_m[1]]);
     }
+    let d = &mix.zfield_draw;
+    h.f32s(&[
+        d.tau,
+        d.normal_weight,
+        crate::technique::geometry::LEAF_TRANSLUCENCY,
+    ])
+    .u32s(&[d.opacity_scaled_tau as u32]);
     h.finish()
 }
 
 /// The tables for `mix`: from the cache when the same inputs were measured before, else
-/// measured ([`measure_ground`]) and written atomically. The file is named after the species.
+/// measured ([`measure_tables`]) and written atomically. The file is named after the species.
 pub fn load_or_measure(
     gpu: &Gpu,
     mix: &ForestMix<'_>,
     params: &ShaderMapBakeParams,
     policy: &CachePolicy,
     progress: &mut dyn FnMut(usize, usize),
-) -> Result<(GroundTables, BakeReport), RenderError> {
+) -> Result<(ShaderMapTables, BakeReport), RenderError> {
     check_mix(mix, params)?;
     let key = cache::CacheKey {
         technique: NAME.to_string(),
@@ -213,19 +223,30 @@ pub fn load_or_measure(
         &stem.join("+"),
         &key,
         policy,
-        |t: &GroundTables| {
+        |t: &ShaderMapTables| {
             if (t.theta, t.phi, t.lambdas.len() as u32) != (theta, phi, lambda) {
                 return Err("the tables' sizes differ from the parameters".into());
             }
             Ok(())
         },
-        || measure_ground(gpu, mix, params, progress),
+        || measure_tables(gpu, mix, params, progress),
     )
+}
+
+/// The work a measurement at `params` does: renders (light maps for every direction and a
+/// G-buffer per view direction, per non-empty density node) and tree-sample evaluations (one
+/// per (view, light) pair per sample of the evaluation grid per node; ground texels are
+/// counted at every texel besides).
+pub fn work(params: &ShaderMapBakeParams) -> (u64, u64) {
+    let (nt, np, nl) = (params.theta as u64, params.phi as u64, params.lambda as u64);
+    let dirs = 1 + (nt - 1) * np;
+    let side = (params.patch_px / (params.patch_px / TREE_SAMPLES_SIDE).max(1)) as u64;
+    ((dirs + nt) * (nl - 1), nt * dirs * side * side * (nl - 1))
 }
 
 /// The direction of table node (θ′ `k`, φ `m`) in the real (unscaled) world: `S⁻¹ v′`, with
 /// the azimuth measured from +X. Zenith capped at [`MAX_MEASURED_ZENITH_DEG`].
-fn direction(t: &GroundTables, k: u32, m: u32) -> Vec3 {
+fn direction(t: &ShaderMapTables, k: u32, m: u32) -> Vec3 {
     let theta = real_zenith(t.theta_at(k), t.h).min(MAX_MEASURED_ZENITH_DEG.to_radians());
     let phi = t.phi_at(m);
     Vec3::new(
@@ -334,37 +355,127 @@ fn copy_range(p: &Patch, t: f32) -> std::ops::RangeInclusive<i32> {
     -k..=k
 }
 
-/// The ground visible from each direction, one bit per texel.
-struct Masks {
-    words: usize,
-    /// `bits[dir]`: set where the ground is visible.
-    bits: Vec<Vec<u64>>,
+/// What one (view, light) pair's evaluation sums.
+#[derive(Debug, Clone, Copy, Default)]
+struct PairSums {
+    /// Σ S′ over the tree samples.
+    sun: f64,
+    /// Tree samples.
+    trees: u32,
+    /// Ground texels seen from the view and lit by the light.
+    ground_lit: u32,
 }
 
-impl Masks {
-    fn count(&self, a: usize) -> u32 {
-        self.bits[a].iter().map(|w| w.count_ones()).sum()
+/// What one view's evaluation sums (with its first light).
+#[derive(Debug, Clone, Copy, Default)]
+struct ViewSums {
+    /// Σ δ·hole over the tree samples.
+    sky: f64,
+    /// Tree samples.
+    trees: u32,
+    /// Ground texels seen.
+    ground: u32,
+}
+
+/// Fixed-point scales of the evaluation's sums (`SUN_ONE`, `SKY_ONE` in `measure.wgsl`).
+const SUN_ONE: f64 = 4096.0;
+const SKY_ONE: f64 = 16384.0;
+
+/// Samples per side of the G-buffer grid 𝕋 and 𝔼 are evaluated on (every `patch_px / 128`-th
+/// texel): 16,384 per (view, light) pair, of which the trees' share counts.
+const TREE_SAMPLES_SIDE: u32 = 128;
+
+/// The most directions drawn into one atlas (8 × 8 tiles).
+const ATLAS_TILES: u32 = 64;
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuEval {
+    view: [f32; 4],
+    sizes: [f32; 4],
+    tiles: [u32; 4],
+    sky: [u32; 4],
+}
+
+/// An atlas of `cols × rows` square tiles of `px` texels, and its depth buffer.
+struct Atlas {
+    view: wgpu::TextureView,
+    depth: Option<wgpu::TextureView>,
+    cols: u32,
+    rows: u32,
+}
+
+impl Atlas {
+    fn new(
+        gpu: &Gpu,
+        label: &str,
+        format: wgpu::TextureFormat,
+        px: u32,
+        tiles: u32,
+        depth: bool,
+    ) -> Self {
+        let max = gpu.device.limits().max_texture_dimension_2d;
+        let fit = (max / px).clamp(1, 8);
+        let cols = fit.min(tiles.max(1));
+        let rows = tiles.max(1).div_ceil(cols).min(fit);
+        let size = wgpu::Extent3d {
+            width: cols * px,
+            height: rows * px,
+            depth_or_array_layers: 1,
+        };
+        let make = |format, usage| {
+            gpu.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size,
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        let texture = make(
+            format,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+        );
+        let view = texture.create_view(&Default::default());
+        let depth = depth.then(|| {
+            make(
+                sylvan_gpu::DEPTH_FORMAT,
+                wgpu::TextureUsages::RENDER_ATTACHMENT,
+            )
+            .create_view(&Default::default())
+        });
+        Self {
+            view,
+            depth,
+            cols,
+            rows,
+        }
     }
 
-    fn count_both(&self, a: usize, b: usize) -> u32 {
-        self.bits[a]
-            .iter()
-            .zip(&self.bits[b])
-            .map(|(x, y)| (x & y).count_ones())
-            .sum()
+    fn tiles(&self) -> usize {
+        (self.cols * self.rows) as usize
+    }
+
+    fn origin(&self, i: usize, px: u32) -> (u32, u32) {
+        ((i as u32 % self.cols) * px, (i as u32 / self.cols) * px)
     }
 }
 
 /// The GPU side of the measurement, built once per table bake.
-struct MaskRenderer {
-    pipeline: wgpu::RenderPipeline,
+struct Measurer {
+    gbuffer: wgpu::RenderPipeline,
+    light: wgpu::RenderPipeline,
+    eval: wgpu::ComputePipeline,
     frame_layout: wgpu::BindGroupLayout,
+    eval_layout: wgpu::BindGroupLayout,
+    empty: wgpu::BindGroup,
     z: ZFieldBindings,
     px: u32,
-    /// Tiles per atlas row and rows.
-    cols: u32,
-    rows: u32,
-    atlas: wgpu::Texture,
+    views: Atlas,
+    lights: Atlas,
 }
 
 /// The module `measure.wgsl` is compiled in: `zfield`'s shader plus the measuring entry points.
@@ -376,8 +487,25 @@ pub(crate) fn shader_source() -> String {
     )
 }
 
-impl MaskRenderer {
-    fn new(gpu: &Gpu, mix: &ForestMix<'_>, px: u32, dirs: usize) -> Result<Self, RenderError> {
+/// The patch's trees drawn for a set of directions: the tile's first `n` trees in every copy
+/// any direction needs.
+struct Drawn {
+    buffer: wgpu::Buffer,
+    /// The tile's trees alone (the evaluation's `trees`).
+    tile: wgpu::Buffer,
+    n: usize,
+    /// Copies per side / 2.
+    k: i32,
+}
+
+impl Measurer {
+    fn new(
+        gpu: &Gpu,
+        mix: &ForestMix<'_>,
+        px: u32,
+        dirs: usize,
+        views: usize,
+    ) -> Result<Self, RenderError> {
         let plants: Vec<Plant> = mix.species.iter().map(|s| s.plant.clone()).collect();
         let baked: Vec<ZFieldBaked> = mix.species.iter().map(|s| s.zfield.clone()).collect();
         let z = ZFieldBindings::upload(
@@ -385,97 +513,157 @@ impl MaskRenderer {
             &plants,
             &baked,
             &mix.zfield_bake,
-            &ZFieldDrawParams::default(),
+            &mix.zfield_draw,
             0.0,
         )?;
         let device = &gpu.device;
+        let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
         let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("shadermap_measure_frame"),
-            entries: &[layout::uniform(0, wgpu::ShaderStages::VERTEX_FRAGMENT)],
+            entries: &[layout::uniform(0, vf)],
         });
-        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let uint = wgpu::TextureSampleType::Uint;
+        let d2 = wgpu::TextureViewDimension::D2;
+        let eval_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("shadermap_measure_eval"),
+            entries: &[
+                layout::uniform(0, cs),
+                layout::texture(1, cs, uint, d2),
+                layout::texture(2, cs, uint, d2),
+                layout::storage(3, cs),
+                layout::storage(4, cs),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 5,
+                    visibility: cs,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { read_only: false },
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let empty_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("shadermap_measure_empty"),
+            entries: &[],
+        });
+        let empty = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("shadermap_measure_empty"),
+            layout: &empty_layout,
+            entries: &[],
+        });
+        let module = sylvan_gpu::shader(gpu, "shadermap_measure", &shader_source());
+        let render_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("shadermap_measure"),
             bind_group_layouts: &[Some(&frame_layout), Some(&z.layout)],
             immediate_size: 0,
         });
-        let module = sylvan_gpu::shader(gpu, "shadermap_measure", &shader_source());
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("shadermap_measure"),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_measure"),
-                compilation_options: Default::default(),
-                buffers: &[None, Some(GpuTreeInstance::LAYOUT)],
-            },
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_measure_mask"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: wgpu::TextureFormat::R8Unorm,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            primitive: Default::default(),
-            depth_stencil: None,
-            multisample: Default::default(),
-            multiview_mask: None,
+        let render = |label, vs, fs, format, depth: bool| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(&render_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some(vs),
+                    compilation_options: Default::default(),
+                    buffers: &[None, Some(GpuTreeInstance::LAYOUT)],
+                },
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some(fs),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format,
+                        blend: None,
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                primitive: Default::default(),
+                depth_stencil: depth.then(|| wgpu::DepthStencilState {
+                    format: sylvan_gpu::DEPTH_FORMAT,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let gbuffer = render(
+            "shadermap_measure_gbuffer",
+            "vs_measure_tree",
+            "fs_measure_gbuffer",
+            wgpu::TextureFormat::Rgba32Uint,
+            true,
+        );
+        let light = render(
+            "shadermap_measure_light",
+            "vs_measure_tree",
+            "fs_measure_light",
+            wgpu::TextureFormat::Rg32Uint,
+            true,
+        );
+        let eval_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("shadermap_measure_eval"),
+            bind_group_layouts: &[Some(&empty_layout), Some(&z.layout), Some(&eval_layout)],
+            immediate_size: 0,
+        });
+        let eval = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("shadermap_measure_eval"),
+            layout: Some(&eval_pipeline_layout),
+            module: &module,
+            entry_point: Some("measure_eval"),
+            compilation_options: Default::default(),
             cache: None,
         });
-        // An atlas of at most 64 tiles (4 MiB at 256²) and the device's texture size.
-        let max = device.limits().max_texture_dimension_2d;
-        let fit = (max / px).max(1);
-        let cols = fit.min(8);
-        let rows = fit.min(8).min((dirs as u32).div_ceil(cols)).max(1);
-        let atlas = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("shadermap_measure_masks"),
-            size: wgpu::Extent3d {
-                width: cols * px,
-                height: rows * px,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::R8Unorm,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
+        let dirs = dirs as u32;
+        let views_atlas = Atlas::new(
+            gpu,
+            "shadermap_gbuffers",
+            wgpu::TextureFormat::Rgba32Uint,
+            px,
+            views as u32,
+            true,
+        );
+        if views_atlas.tiles() < views {
+            return Err(RenderError::Option(format!(
+                "shadermap: {views} view G-buffers of {px}² do not fit the device's textures — lower patch_px or theta"
+            )));
+        }
+        let lights = Atlas::new(
+            gpu,
+            "shadermap_light_maps",
+            wgpu::TextureFormat::Rg32Uint,
+            px,
+            dirs.min(ATLAS_TILES),
+            true,
+        );
         Ok(Self {
-            pipeline,
+            gbuffer,
+            light,
+            eval,
             frame_layout,
+            eval_layout,
+            empty,
             z,
             px,
-            cols,
-            rows,
-            atlas,
+            views: views_atlas,
+            lights,
         })
     }
 
-    /// The visibility masks of `dirs` for the first `n` trees of `p`.
-    fn masks(&self, gpu: &Gpu, p: &Patch, n: usize, dirs: &[Vec3]) -> Result<Masks, RenderError> {
-        let px = self.px;
-        let words = (px as usize * px as usize).div_ceil(64);
-        let mut out = Masks {
-            words,
-            bits: Vec::with_capacity(dirs.len()),
-        };
-        if n == 0 {
-            out.bits = vec![vec![u64::MAX; words]; dirs.len()];
-            return Ok(out);
-        }
+    /// The tile's first `n` trees, copied wherever `dirs` can see them from the tile.
+    fn drawn(&self, gpu: &Gpu, p: &Patch, n: usize, dirs: &[Vec3]) -> Drawn {
         let k = dirs
             .iter()
-            .map(|d| {
-                let r = copy_range(p, (d.x / d.y).abs().max((d.z / d.y).abs()));
-                *r.end()
-            })
+            .map(|d| *copy_range(p, (d.x / d.y).abs().max((d.z / d.y).abs())).end())
             .max()
             .unwrap_or(1);
-        let side = 2 * k + 1;
-        let mut instances = Vec::with_capacity(side as usize * side as usize * n);
+        let mut instances = Vec::with_capacity(((2 * k + 1) * (2 * k + 1)) as usize * n.max(1));
         for cz in -k..=k {
             for cx in -k..=k {
                 for (_, t) in &p.trees[..n] {
@@ -486,123 +674,326 @@ impl MaskRenderer {
                 }
             }
         }
-        let device = &gpu.device;
-        let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("shadermap_measure_trees"),
-            contents: bytemuck::cast_slice(&instances),
-            usage: wgpu::BufferUsages::VERTEX,
-        });
-        let align = device.limits().min_uniform_buffer_offset_alignment as u64;
-        let stride = (std::mem::size_of::<GpuFrame>() as u64).div_ceil(align) * align;
-        let per_batch = (self.cols * self.rows) as usize;
-        let view = self.atlas.create_view(&Default::default());
-        for batch in dirs.chunks(per_batch) {
-            let mut uniforms = vec![0u8; stride as usize * batch.len()];
-            for (i, d) in batch.iter().enumerate() {
-                let f = frame_for(*d, p.side, px);
-                let at = i * stride as usize;
-                uniforms[at..at + std::mem::size_of::<GpuFrame>()]
-                    .copy_from_slice(bytemuck::bytes_of(&f));
-            }
-            let ubuf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("shadermap_measure_frames"),
-                contents: &uniforms,
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
-            let binds: Vec<wgpu::BindGroup> = (0..batch.len())
-                .map(|i| {
-                    device.create_bind_group(&wgpu::BindGroupDescriptor {
-                        label: Some("shadermap_measure_frame"),
-                        layout: &self.frame_layout,
-                        entries: &[wgpu::BindGroupEntry {
-                            binding: 0,
-                            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                                buffer: &ubuf,
-                                offset: i as u64 * stride,
-                                size: wgpu::BufferSize::new(std::mem::size_of::<GpuFrame>() as u64),
-                            }),
-                        }],
-                    })
+        if instances.is_empty() {
+            instances.push(bytemuck::Zeroable::zeroed());
+        }
+        let tile: Vec<GpuTreeInstance> = p.trees[..n.max(1).min(p.trees.len())]
+            .iter()
+            .map(|(_, t)| *t)
+            .collect();
+        let init = |label, contents: &[u8], usage| {
+            gpu.device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents,
+                    usage,
                 })
-                .collect();
-            let mut encoder = device.create_command_encoder(&Default::default());
-            {
-                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("shadermap_measure"),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view: &view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })],
-                    depth_stencil_attachment: None,
-                    timestamp_writes: None,
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                });
-                pass.set_pipeline(&self.pipeline);
-                pass.set_bind_group(1, &self.z.bind, &[]);
-                pass.set_vertex_buffer(1, buffer.slice(..));
-                for (i, d) in batch.iter().enumerate() {
-                    let (x, y) = ((i as u32 % self.cols) * px, (i as u32 / self.cols) * px);
-                    pass.set_viewport(x as f32, y as f32, px as f32, px as f32, 0.0, 1.0);
-                    pass.set_scissor_rect(x, y, px, px);
-                    pass.set_bind_group(0, &binds[i], &[]);
-                    let (rx, rz) = (copy_range(p, d.x / d.y), copy_range(p, d.z / d.y));
-                    for cz in rz.clone() {
-                        let row = (cz + k) as usize * side as usize;
-                        let first = (row + (*rx.start() + k) as usize) * n;
-                        let last = (row + (*rx.end() + k) as usize + 1) * n;
-                        pass.draw(0..6, first as u32..last as u32);
-                    }
+        };
+        Drawn {
+            buffer: init(
+                "shadermap_measure_trees",
+                bytemuck::cast_slice(&instances),
+                wgpu::BufferUsages::VERTEX,
+            ),
+            tile: init(
+                "shadermap_measure_tile",
+                bytemuck::cast_slice(&tile),
+                wgpu::BufferUsages::STORAGE,
+            ),
+            n,
+            k,
+        }
+    }
+
+    /// Frame bind groups for `dirs` (one uniform block each).
+    fn frames(
+        &self,
+        gpu: &Gpu,
+        p: &Patch,
+        n: usize,
+        dirs: &[Vec3],
+    ) -> (wgpu::Buffer, Vec<wgpu::BindGroup>) {
+        let device = &gpu.device;
+        let align = device.limits().min_uniform_buffer_offset_alignment as u64;
+        let size = std::mem::size_of::<GpuFrame>() as u64;
+        let stride = size.div_ceil(align) * align;
+        let mut bytes = vec![0u8; (stride as usize * dirs.len()).max(stride as usize)];
+        for (i, d) in dirs.iter().enumerate() {
+            let f = frame_for(*d, p, n, self.px);
+            let at = i * stride as usize;
+            bytes[at..at + size as usize].copy_from_slice(bytemuck::bytes_of(&f));
+        }
+        let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("shadermap_measure_frames"),
+            contents: &bytes,
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let binds = (0..dirs.len())
+            .map(|i| {
+                device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("shadermap_measure_frame"),
+                    layout: &self.frame_layout,
+                    entries: &[wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                            buffer: &buffer,
+                            offset: i as u64 * stride,
+                            size: wgpu::BufferSize::new(size),
+                        }),
+                    }],
+                })
+            })
+            .collect();
+        (buffer, binds)
+    }
+
+    /// Draws `dirs` (bind groups `binds`) into `atlas` tiles `0..` with `pipeline`.
+    #[allow(clippy::too_many_arguments)]
+    fn draw_tiles(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        pipeline: &wgpu::RenderPipeline,
+        atlas: &Atlas,
+        p: &Patch,
+        drawn: &Drawn,
+        dirs: &[Vec3],
+        binds: &[wgpu::BindGroup],
+    ) {
+        let px = self.px;
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("shadermap_measure"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &atlas.view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: atlas.depth.as_ref().map(|view| {
+                wgpu::RenderPassDepthStencilAttachment {
+                    view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
                 }
-            }
-            gpu.queue.submit([encoder.finish()]);
-            let bytes = sylvan_gpu::read_texture_bytes(gpu, &self.atlas)?;
-            let width = (self.cols * px) as usize;
-            for i in 0..batch.len() {
-                let (x0, y0) = (
-                    (i as u32 % self.cols * px) as usize,
-                    (i as u32 / self.cols * px) as usize,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        if drawn.n == 0 {
+            return;
+        }
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(1, &self.z.bind, &[]);
+        let side = (2 * drawn.k + 1) as usize;
+        let record = std::mem::size_of::<GpuTreeInstance>() as u64;
+        for (i, d) in dirs.iter().enumerate() {
+            let (x, y) = atlas.origin(i, px);
+            pass.set_viewport(x as f32, y as f32, px as f32, px as f32, 0.0, 1.0);
+            pass.set_scissor_rect(x, y, px, px);
+            pass.set_bind_group(0, &binds[i], &[]);
+            let (rx, rz) = (copy_range(p, d.x / d.y), copy_range(p, d.z / d.y));
+            for cz in rz {
+                // Whole copies from a copy boundary, bound as the vertex buffer's range (no
+                // first instance: GL), so instance index mod n is the tree in the tile.
+                let row = (cz + drawn.k) as usize * side;
+                let first = (row + (*rx.start() + drawn.k) as usize) * drawn.n;
+                let last = (row + (*rx.end() + drawn.k) as usize + 1) * drawn.n;
+                pass.set_vertex_buffer(
+                    1,
+                    drawn
+                        .buffer
+                        .slice(first as u64 * record..last as u64 * record),
                 );
-                let mut bits = vec![0u64; words];
-                for y in 0..px as usize {
-                    let row = &bytes[(y0 + y) * width + x0..][..px as usize];
-                    for (x, &b) in row.iter().enumerate() {
-                        if b == 0 {
-                            let t = y * px as usize + x;
-                            bits[t / 64] |= 1 << (t % 64);
-                        }
-                    }
-                }
-                out.bits.push(bits);
+                pass.draw(0..6, 0..(last - first) as u32);
             }
         }
-        Ok(out)
+    }
+
+    /// The stride between the G-buffer texels 𝕋 and 𝔼 are evaluated at: at most
+    /// [`TREE_SAMPLES_SIDE`]² samples per (view, light) pair.
+    fn stride(&self) -> u32 {
+        (self.px / TREE_SAMPLES_SIDE).max(1)
+    }
+
+    /// The sums of every (view, light) pair: view G-buffers once, then per batch of lights
+    /// their light maps and one evaluation dispatch per view. Returns per view and light
+    /// [`PairSums`] and per view [`ViewSums`].
+    fn evaluate(
+        &self,
+        gpu: &Gpu,
+        p: &Patch,
+        drawn: &Drawn,
+        views: &[Vec3],
+        lights: &[Vec3],
+        lambda: f32,
+    ) -> Result<(Vec<PairSums>, Vec<ViewSums>), RenderError> {
+        let device = &gpu.device;
+        let (nv, nl) = (views.len(), lights.len());
+        let entries = nv * nl + nv;
+        let acc = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("shadermap_measure_acc"),
+            contents: &vec![0u8; entries * 12],
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        });
+        let light_dirs: Vec<[f32; 4]> = lights.iter().map(|d| d.extend(0.0).to_array()).collect();
+        let light_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("shadermap_measure_lights"),
+            contents: bytemuck::cast_slice(&light_dirs),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let per_batch = self.lights.tiles();
+        let batches = nl.div_ceil(per_batch);
+        let align = device.limits().min_uniform_buffer_offset_alignment as u64;
+        let size = std::mem::size_of::<GpuEval>() as u64;
+        let stride = size.div_ceil(align) * align;
+        let mut bytes = vec![0u8; stride as usize * nv * batches];
+        for b in 0..batches {
+            let first = b * per_batch;
+            for (k, v) in views.iter().enumerate() {
+                let (x, y) = self.views.origin(k, self.px);
+                let e = GpuEval {
+                    view: v.extend(p.side).to_array(),
+                    sizes: [self.px as f32, drawn.n as f32, lambda, self.stride() as f32],
+                    tiles: [x, y, self.lights.cols, (k * nl + first) as u32],
+                    sky: [(nv * nl + k) as u32, (b == 0) as u32, first as u32, 0],
+                };
+                let at = (b * nv + k) * stride as usize;
+                bytes[at..at + size as usize].copy_from_slice(bytemuck::bytes_of(&e));
+            }
+        }
+        let evals = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("shadermap_measure_evals"),
+            contents: &bytes,
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let binds: Vec<wgpu::BindGroup> = (0..nv * batches)
+            .map(|i| {
+                device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("shadermap_measure_eval"),
+                    layout: &self.eval_layout,
+                    entries: &[
+                        wgpu::BindGroupEntry {
+                            binding: 0,
+                            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                                buffer: &evals,
+                                offset: i as u64 * stride,
+                                size: wgpu::BufferSize::new(size),
+                            }),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 1,
+                            resource: wgpu::BindingResource::TextureView(&self.views.view),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 2,
+                            resource: wgpu::BindingResource::TextureView(&self.lights.view),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 3,
+                            resource: drawn.tile.as_entire_binding(),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 4,
+                            resource: light_buffer.as_entire_binding(),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 5,
+                            resource: acc.as_entire_binding(),
+                        },
+                    ],
+                })
+            })
+            .collect();
+        let (_vbuf, vbinds) = self.frames(gpu, p, drawn.n, views);
+        let (_lbuf, lbinds) = self.frames(gpu, p, drawn.n, lights);
+        let mut encoder = device.create_command_encoder(&Default::default());
+        self.draw_tiles(
+            &mut encoder,
+            &self.gbuffer,
+            &self.views,
+            p,
+            drawn,
+            views,
+            &vbinds,
+        );
+        let groups = self.px.div_ceil(8);
+        for b in 0..batches {
+            let first = b * per_batch;
+            let count = per_batch.min(nl - first);
+            self.draw_tiles(
+                &mut encoder,
+                &self.light,
+                &self.lights,
+                p,
+                drawn,
+                &lights[first..first + count],
+                &lbinds[first..first + count],
+            );
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("shadermap_measure_eval"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.eval);
+            pass.set_bind_group(0, &self.empty, &[]);
+            pass.set_bind_group(1, &self.z.bind, &[]);
+            for k in 0..nv {
+                pass.set_bind_group(2, &binds[b * nv + k], &[]);
+                pass.dispatch_workgroups(groups, groups, count as u32);
+            }
+        }
+        gpu.queue.submit([encoder.finish()]);
+        let raw = sylvan_gpu::read_buffer_bytes(gpu, &acc)?;
+        let words: &[u32] = bytemuck::cast_slice(&raw);
+        let pairs = (0..nv * nl)
+            .map(|e| PairSums {
+                sun: words[3 * e] as f64 / SUN_ONE,
+                trees: words[3 * e + 1],
+                ground_lit: words[3 * e + 2],
+            })
+            .collect();
+        let views = (0..nv)
+            .map(|k| {
+                let e = nv * nl + k;
+                ViewSums {
+                    sky: words[3 * e] as f64 / SKY_ONE,
+                    trees: words[3 * e + 1],
+                    ground: words[3 * e + 2],
+                }
+            })
+            .collect();
+        Ok((pairs, views))
     }
 }
 
 /// The frame uniforms of one direction's render.
-fn frame_for(d: Vec3, side: f32, px: u32) -> GpuFrame {
+fn frame_for(d: Vec3, p: &Patch, n: usize, px: u32) -> GpuFrame {
     let mut f: GpuFrame = bytemuck::Zeroable::zeroed();
-    f.view_proj = sheared(d, side).to_cols_array_2d();
+    f.view_proj = sheared(d, p.side).to_cols_array_2d();
     f.sun_dir = d.extend(0.0).to_array();
-    f.camera = [0.0, 0.0, 0.0, px as f32 / side];
+    f.camera = [
+        0.0,
+        p.top_m * 1.01 + 1.0,
+        n.max(1) as f32,
+        px as f32 / p.side,
+    ];
     f.shadow_params = [1.0 / px as f32, 0.0, 0.0, 1.0];
     f
 }
 
-/// Measures 𝔾, its diagonal and 𝔻 for `mix` (see the module doc). `progress(done, total)`
-/// counts density nodes.
-pub fn measure_ground(
+/// Measures the tables for `mix` (see the module doc). `progress(done, total)` counts density
+/// nodes.
+pub fn measure_tables(
     gpu: &Gpu,
     mix: &ForestMix<'_>,
     params: &ShaderMapBakeParams,
     progress: &mut dyn FnMut(usize, usize),
-) -> Result<GroundTables, RenderError> {
+) -> Result<ShaderMapTables, RenderError> {
     check_mix(mix, params)?;
     let (area, h, weights) = mix_shape(mix)?;
     let p = patch(mix, params, &weights)?;
@@ -625,60 +1016,88 @@ pub fn measure_ground(
     }
     let lambdas: Vec<f32> = counts.iter().map(|&c| c as f32 / area_m2).collect();
     let px = params.patch_px;
-    let mut t = GroundTables {
+    let full = (nl * nt * nt * np) as usize;
+    let mut t = ShaderMapTables {
         theta: nt,
         phi: np,
         lambdas,
         h,
         crown_area_m2: area,
         samples: px * px,
-        g: vec![0.0; (nl * nt * nt * np) as usize],
+        g: vec![0.0; full],
         gd: vec![0.0; (nl * nt) as usize],
         d: vec![0.0; nl as usize],
+        t: vec![0.0; full],
+        e: vec![0.0; (nl * nt) as usize],
     };
-    // Measured directions: the zenith, then (θ node k, φ node m) for 0 < k < θ − 1.
+    // Directions: the zenith, then (θ node k, φ node m) for 0 < k < θ; the view directions are
+    // those of φ = 0. 𝔾 at 90° is analytic (no ground is seen through an endless forest);
+    // 𝕋 and 𝔼 there are measured at the capped zenith.
     let mut dirs = vec![Vec3::Y];
-    for k in 1..nt - 1 {
+    for k in 1..nt {
         for m in 0..np {
             dirs.push(direction(&t, k, m));
         }
     }
-    let index = |k: u32, m: u32| -> Option<usize> {
+    let index = |k: u32, m: u32| -> usize {
         match k {
-            0 => Some(0),
-            k if k == nt - 1 => None,
-            k => Some(1 + ((k - 1) * np + m) as usize),
+            0 => 0,
+            k => 1 + ((k - 1) * np + m) as usize,
         }
     };
-    let renderer = MaskRenderer::new(gpu, mix, px, dirs.len())?;
+    let view_dirs: Vec<Vec3> = (0..nt).map(|k| dirs[index(k, 0)]).collect();
+    let measurer = Measurer::new(gpu, mix, px, dirs.len(), view_dirs.len())?;
     let n_all = (px * px) as f32;
+    let (ntu, npu) = (nt as usize, np as usize);
     for (l, &n) in counts.iter().enumerate() {
         progress(l, nl as usize);
-        let masks = renderer.masks(gpu, &p, n, &dirs)?;
-        debug_assert_eq!(masks.words, (px as usize * px as usize).div_ceil(64));
+        let drawn = measurer.drawn(gpu, &p, n, &dirs);
+        let (pairs, views) = if n > 0 {
+            measurer.evaluate(gpu, &p, &drawn, &view_dirs, &dirs, t.lambdas[l])?
+        } else {
+            (Vec::new(), Vec::new())
+        };
+        let grazing = |k: u32| k == nt - 1;
+        let nd = dirs.len();
         for v in 0..nt {
-            let gd = match index(v, 0) {
-                Some(a) => masks.count(a) as f32 / n_all,
-                None if n == 0 => 1.0,
-                None => 0.0,
+            let vi = v as usize;
+            let gd = match (grazing(v), n) {
+                (_, 0) => 1.0,
+                (true, _) => 0.0,
+                _ => views[vi].ground as f32 / n_all,
             };
-            t.gd[l * nt as usize + v as usize] = gd;
+            t.gd[l * ntu + vi] = gd;
+            if n > 0 {
+                let w = views[vi];
+                t.e[l * ntu + vi] = (w.sky / w.trees.max(1) as f64).clamp(0.0, 1.0) as f32;
+            }
             for s in 0..nt {
                 for m in 0..np {
-                    let g = match (index(v, 0), index(s, m)) {
-                        (Some(a), Some(b)) => masks.count_both(a, b) as f32 / n_all,
-                        _ if n == 0 => 1.0,
-                        _ => 0.0,
+                    let pair = pairs
+                        .get(vi * nd + index(s, m))
+                        .copied()
+                        .unwrap_or_default();
+                    let g = match (grazing(v) || grazing(s), n) {
+                        (_, 0) => 1.0,
+                        (true, _) => 0.0,
+                        _ => pair.ground_lit as f32 / n_all,
                     };
-                    let at = ((l * nt as usize + v as usize) * nt as usize + s as usize)
-                        * np as usize
-                        + m as usize;
+                    let at = ((l * ntu + vi) * ntu + s as usize) * npu + m as usize;
                     t.g[at] = g;
+                    if n > 0 {
+                        t.t[at] = (pair.sun / pair.trees.max(1) as f64).clamp(0.0, 4.0) as f32;
+                    }
                 }
             }
         }
         t.d[l] = t.integrate_d(l, 64).clamp(0.0, 1.0);
     }
+    // No tree at node 0: its 𝕋 and 𝔼 are node 1's (they are never weighted there).
+    let (row, erow) = (ntu * ntu * npu, ntu);
+    let (first, rest) = t.t.split_at_mut(row);
+    first.copy_from_slice(&rest[..row]);
+    let (first, rest) = t.e.split_at_mut(erow);
+    first.copy_from_slice(&rest[..erow]);
     progress(nl as usize, nl as usize);
     Ok(t)
 }

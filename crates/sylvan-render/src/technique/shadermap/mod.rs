@@ -1,46 +1,59 @@
 //! BN12's shader-map (Bruneton & Neyret, *Real-time Realistic Rendering and Lighting of
 //! Forests*, 2012), the far end of the `auto` chain — **in progress**: this module holds what
-//! is built of it so far, the first half of §6's precomputed tables. It draws nothing yet: it
-//! is not in the registry (`render --technique shadermap` is an unknown technique), and only
+//! is built of it so far, §6's precomputed tables. It draws nothing yet: it is not in the
+//! registry (`render --technique shadermap` is an unknown technique), and only
 //! `sylvan bake --technique shadermap [--scene FILE]` measures its tables.
 //! `docs/plans/shadermap.md` is the plan and says what comes next.
 //!
-//! **Built** ([`measure`], [`tables`]): the ground tables of §6 — 𝔾(θv, θl, φ, λ), the fraction
-//! of ground seen from the view that the sun also reaches (eq. 14), its diagonal 𝔾(θ, θ, 0, λ)
-//! (`k_g + k_ḡ`, eq. 15) and 𝔻(λ), the ground's cosine-weighted sky visibility (eq. 18–19) —
-//! measured by rendering `zfield` forest patches of the scene's species mix, and cached like
+//! **Built** ([`measure`], [`tables`], [`scene`]): the tables of §6 for a scene's species mix —
+//! 𝔾(θv, θl, φ, λ), the fraction of ground seen from the view that the sun also reaches
+//! (eq. 14); its diagonal 𝔾(θ, θ, 0, λ) (`k_g + k_ḡ`, eq. 15); 𝕋(θv, θl, φ, λ), the sunlight
+//! reaching the tree points seen (eq. 16 with `zfield`'s eq. 7 inside); 𝔻(λ), the ground's
+//! cosine-weighted sky visibility (eq. 18–19); 𝔼(θv, λ), the sky reaching the tree points seen
+//! (eq. 21 with `zfield`'s eq. 9) — measured by rendering `zfield` forest patches, cached like
 //! every bake ([`measure::load_or_measure`]).
 //!
-//! **Not built yet**: 𝕋 and 𝔼 (the lit and sky-lit fractions of the visible trees, eq. 16 and
-//! 21, which need `zfield`'s light-ray reconstruction in the measuring pass), ℂ, the field on
-//! the terrain, coverage tiles, seeds on the GPU and the transitions of §7.
+//! **Not built yet**: ℂ, the ridge-aligned storage and f16 GPU packing, the field on the
+//! terrain, coverage tiles, seeds on the GPU, the transitions of §7.
 //!
 //! **Deviations from BN12**, each stated:
 //! - The patch is drawn unscaled and each table direction `v′` of the transformed space
 //!   (`S = diag(1, 2/h, 1)`, BN12's scaling of the forest by `2/h`) is measured along `S⁻¹ v′`:
 //!   ground-visibility fractions are invariant under the affine map `S` (the ground plane is
-//!   fixed, rays map to rays), and `zfield` instances are similarities only.
-//! - All (θv, θl, φ) entries of a density node come from one render per direction (1 + (θ − 2)·φ
-//!   of them) and bit counts, not one render per entry: the ground texel seen from v and lit
-//!   from l is the AND of two masks in the same ground-aligned pixels.
+//!   fixed, rays map to rays), `zfield` instances are similarities only, and 𝕋 then uses the
+//!   true path lengths `zfield`'s eq. 7 uses.
+//! - Factorised, not one render per entry: per density node one render per direction of the
+//!   grid (`1 + (θ − 1)·φ` of them, sheared ground-aligned orthographic projections, so a pixel
+//!   is the same ground texel in all), each writing the highest tree point along each ground
+//!   texel's ray; the view directions' renders are G-buffers (tree, p_v's height, δ_v, normal),
+//!   the others light maps. One compute pass per view and batch of lights evaluates every
+//!   (view, light) pair: 𝔾 counts the texels that are ground in both, 𝕋 reconstructs each tree
+//!   sample's light ray with `zfield`'s own `z_light` and lights it with `zfield`'s phase and
+//!   extinction, `V(p_l)` = 1 where the light map's highest point along the light ray through
+//!   p_l is the same tree or lies below p_l. 𝕋 and 𝔼 use every `patch_px / 128`-th texel.
 //! - A tree hides a ground texel's ray where its z-field opacity α along the ray exceeds a
 //!   threshold hashed from (texel, tree), the same for every direction: fractional opacity
 //!   counts as the expected `(1 − α)ⁿ` over many texels, and a texel hidden from v is hidden
 //!   from l = v. The runtime `zfield` casts shadows where α > ½ (depth-only cascades); the
 //!   tables keep the physical mean.
-//! - The 90° node is analytic (no ground is seen through an endless forest at grazing
-//!   angles); directions measured are capped at 87° real zenith.
+//! - 𝕋 is relative to an unshadowed isotropic leaf and carries `zfield`'s normal-weighted
+//!   phase (`normal_weight`, default 0.5), so the far field can match the near trees; at
+//!   `normal_weight = 0`, `tau = 0` it is BN12's `k_t / (k_t + k_t̄)`.
+//! - 𝔾 at the 90° node is analytic (no ground is seen through an endless forest at grazing
+//!   angles); the directions rendered are capped at 87° real zenith (𝕋 and 𝔼 at 90° are
+//!   measured there).
 //! - One table set for the scene's species mix, h and A area-weighted over it (BN12 §10 allows
 //!   per-mix sets); the patch is a periodic Poisson tile with the scene's pattern radius, not
-//!   the terrain's own tiling, so the wrap-around is exact.
+//!   the terrain's own tiling, so the wrap-around is exact. Density nodes are the patch's
+//!   realised densities (n trees / area).
 
 pub mod measure;
 pub mod scene;
 pub mod tables;
 
-pub use measure::{ForestMix, MixSpecies, load_or_measure, measure_ground};
+pub use measure::{ForestMix, MixSpecies, load_or_measure, measure_tables};
 pub use scene::{SceneMix, bake_scene, scene_mix};
-pub use tables::GroundTables;
+pub use tables::ShaderMapTables;
 
 use super::params::{ParamDoc, ParamTable};
 

@@ -2,7 +2,7 @@
 //! and peak density, and the tables baked for it (`sylvan bake --technique shadermap`).
 
 use super::measure::{ForestMix, MixSpecies, load_or_measure};
-use super::{GroundTables, ShaderMapBakeParams};
+use super::{ShaderMapBakeParams, ShaderMapTables};
 use crate::RenderError;
 use crate::bake::{BakeReport, CachePolicy, load_or_bake};
 use crate::technique::params::{NoParams, resolve};
@@ -108,11 +108,11 @@ pub fn bake_scene(
     settings: &[Setting],
     policy: &CachePolicy,
     progress: &mut dyn FnMut(&str, usize, usize),
-) -> Result<(GroundTables, BakeReport), RenderError> {
+) -> Result<(ShaderMapTables, BakeReport), RenderError> {
     let of =
         |name: &str| -> Vec<&Setting> { settings.iter().filter(|s| s.technique == name).collect() };
-    let (params, _) = resolve::<ShaderMapBakeParams, NoParams>("shadermap", &of("shadermap"))?;
-    let (zbake, _) = resolve::<ZFieldBakeParams, ZFieldDrawParams>("zfield", &of("zfield"))?;
+    let params = self::params(settings)?;
+    let (zbake, zdraw) = resolve::<ZFieldBakeParams, ZFieldDrawParams>("zfield", &of("zfield"))?;
     let mix = scene_mix(scene)?;
     let mut zfields = Vec::with_capacity(mix.species.len());
     for s in &mix.species {
@@ -137,12 +137,22 @@ pub fn bake_scene(
             })
             .collect(),
         zfield_bake: zbake,
+        zfield_draw: zdraw,
         radius_m: mix.radius_m,
         lambda_max: mix.lambda_max,
     };
     load_or_measure(gpu, &forest, &params, policy, &mut |d, t| {
         progress("shadermap tables", d, t)
     })
+}
+
+/// The table parameters `settings` give (defaults for the keys they do not set).
+pub fn params(settings: &[Setting]) -> Result<ShaderMapBakeParams, RenderError> {
+    let mine: Vec<&Setting> = settings
+        .iter()
+        .filter(|s| s.technique == "shadermap")
+        .collect();
+    resolve::<ShaderMapBakeParams, NoParams>("shadermap", &mine).map(|(b, _)| b)
 }
 
 /// Checks `shadermap.*` settings without a GPU (the tables are not a registered technique

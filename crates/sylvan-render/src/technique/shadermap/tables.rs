@@ -1,16 +1,17 @@
-//! The shader-map's ground tables (BN12 §6, eq. 14–16 and 18–19) as measured, and their codec.
+//! The shader-map's tables (BN12 §6: 𝔾 and 𝕋 eq. 14–16, 𝔻 eq. 18–19, 𝔼 eq. 21) as measured,
+//! and their codec.
 //!
 //! Axes, all in BN12's transformed space (the forest scaled vertically by `2/h`, so crowns are
 //! near-spheres and the angles mean the same for every species mix): `θ` (view or light zenith)
 //! on `theta` equal nodes of [0°, 90°], `φ` (the azimuth between view and light) on `phi`
-//! equal nodes of [0°, 180°], `λ` (trees per m²) on [`GroundTables::lambdas`] (node 0 is no
+//! equal nodes of [0°, 180°], `λ` (trees per m²) on [`ShaderMapTables::lambdas`] (node 0 is no
 //! tree at all).
 
 use crate::bake::codec::{Codec, DecodeError, Decoder, Encoder};
 
-/// 𝔾, its diagonal and 𝔻 for one species mix.
+/// 𝔾, its diagonal, 𝕋, 𝔻 and 𝔼 for one species mix.
 #[derive(Debug, Clone, PartialEq)]
-pub struct GroundTables {
+pub struct ShaderMapTables {
     /// Zenith nodes (view and light), ≥ 2; node `k` is `90° · k / (theta − 1)`.
     pub theta: u32,
     /// Azimuth nodes, ≥ 2; node `m` is `180° · m / (phi − 1)`.
@@ -32,9 +33,18 @@ pub struct GroundTables {
     pub gd: Vec<f32>,
     /// `d[l]`: 𝔻(λ), the sky's cosine-weighted visibility from the ground (eq. 18–19).
     pub d: Vec<f32>,
+    /// `t[((l · theta + v) · theta + t) · phi + m]`: 𝕋(θv, θl, φ, λ), the sunlight reaching
+    /// the tree points seen from the view, relative to an unshadowed, unattenuated isotropic
+    /// leaf: the mean of `zfield`'s `phase · exp(−τ‖p_l − p_v‖) · V(p_l)` without `sun_scale`
+    /// (eq. 16's `k_t / (k_t + k_t̄)` with `zfield`'s eq. 7 inside; exactly BN12's at
+    /// `normal_weight = 0`, `tau = 0`).
+    pub t: Vec<f32>,
+    /// `e[l · theta + v]`: 𝔼(θv, λ), the sky reaching the tree points seen from the view: the
+    /// mean of `zfield`'s `δ_v / (1 + d²λ/4)` (eq. 9 in eq. 21).
+    pub e: Vec<f32>,
 }
 
-impl GroundTables {
+impl ShaderMapTables {
     /// Zenith angle of node `k`, radians (transformed space).
     pub fn theta_at(&self, k: u32) -> f32 {
         std::f32::consts::FRAC_PI_2 * k as f32 / (self.theta - 1) as f32
@@ -49,6 +59,17 @@ impl GroundTables {
     pub fn g_node(&self, l: usize, v: usize, t: usize, m: usize) -> f32 {
         let (nt, np) = (self.theta as usize, self.phi as usize);
         self.g[((l * nt + v) * nt + t) * np + m]
+    }
+
+    /// 𝕋 at nodes (λ `l`, θv `v`, θl `t`, φ `m`).
+    pub fn t_node(&self, l: usize, v: usize, t: usize, m: usize) -> f32 {
+        let (nt, np) = (self.theta as usize, self.phi as usize);
+        self.t[((l * nt + v) * nt + t) * np + m]
+    }
+
+    /// 𝔼 at nodes (λ `l`, θv `v`).
+    pub fn e_node(&self, l: usize, v: usize) -> f32 {
+        self.e[l * self.theta as usize + v]
     }
 
     /// 𝔾's diagonal at nodes (λ `l`, θ `v`).
@@ -90,11 +111,19 @@ impl GroundTables {
                 "table sizes θ {nt}, φ {np}, λ {nl}: each must be 2 to 64"
             ));
         }
-        if self.g.len() != nl * nt * nt * np || self.gd.len() != nl * nt || self.d.len() != nl {
+        let full = nl * nt * nt * np;
+        if self.g.len() != full
+            || self.t.len() != full
+            || self.gd.len() != nl * nt
+            || self.e.len() != nl * nt
+            || self.d.len() != nl
+        {
             return Err(format!(
-                "table lengths 𝔾 {}, diagonal {}, 𝔻 {} do not fit θ {nt} × φ {np} × λ {nl}",
+                "table lengths 𝔾 {}, 𝕋 {}, diagonal {}, 𝔼 {}, 𝔻 {} do not fit θ {nt} × φ {np} × λ {nl}",
                 self.g.len(),
+                self.t.len(),
                 self.gd.len(),
+                self.e.len(),
                 self.d.len()
             ));
         }
@@ -116,6 +145,11 @@ impl GroundTables {
         if !self.g.iter().all(unit) || !self.gd.iter().all(unit) || !self.d.iter().all(unit) {
             return Err("a visibility fraction outside [0, 1]".into());
         }
+        // 𝕋 carries the normal-weighted phase (up to 1/0.34 ≈ 2.9 at a sunlit normal); 𝔼 a
+        // visibility.
+        if !self.t.iter().all(|v| (0.0..=4.0).contains(v)) || !self.e.iter().all(unit) {
+            return Err("a tree lighting fraction out of range (𝕋 in [0, 4], 𝔼 in [0, 1])".into());
+        }
         Ok(())
     }
 }
@@ -133,7 +167,7 @@ pub fn real_zenith(theta: f32, h: f32) -> f32 {
     s.atan2(c * h / 2.0)
 }
 
-impl Codec for GroundTables {
+impl Codec for ShaderMapTables {
     fn encode(&self) -> Vec<u8> {
         let mut e = Encoder::default();
         e.u32(self.theta);
@@ -145,6 +179,8 @@ impl Codec for GroundTables {
         e.f32s(&self.g);
         e.f32s(&self.gd);
         e.f32s(&self.d);
+        e.f32s(&self.t);
+        e.f32s(&self.e);
         e.buf
     }
 
@@ -160,6 +196,8 @@ impl Codec for GroundTables {
             g: d.f32s()?,
             gd: d.f32s()?,
             d: d.f32s()?,
+            t: d.f32s()?,
+            e: d.f32s()?,
         };
         d.finish()?;
         t.check().map_err(DecodeError)?;

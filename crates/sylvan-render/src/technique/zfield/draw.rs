@@ -185,21 +185,27 @@ impl ZFieldBindings {
             usage: wgpu::BufferUsages::UNIFORM,
         });
         let sampler = common::trilinear_sampler(gpu, "zfield_sampler");
-        let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
+        // Compute too: `shadermap`'s table measurement evaluates z-field light rays in a
+        // compute pass with this group.
+        let all = wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE;
+        let atlas = |binding| {
+            layout::texture(
+                binding,
+                all,
+                wgpu::TextureSampleType::Float { filterable: true },
+                wgpu::TextureViewDimension::D2Array,
+            )
+        };
         let bind_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("zfield_layout"),
             entries: &[
-                layout::storage(0, vf),
-                layout::storage(1, vf),
-                layout::atlas(2),
-                layout::atlas(3),
-                layout::atlas(4),
-                layout::sampler(
-                    5,
-                    wgpu::ShaderStages::FRAGMENT,
-                    wgpu::SamplerBindingType::Filtering,
-                ),
-                layout::uniform(6, vf),
+                layout::storage(0, all),
+                layout::storage(1, all),
+                atlas(2),
+                atlas(3),
+                atlas(4),
+                layout::sampler(5, all, wgpu::SamplerBindingType::Filtering),
+                layout::uniform(6, all),
             ],
         });
         let (cv, nv, zv) = (color.view(), normal.view(), zfield.view());

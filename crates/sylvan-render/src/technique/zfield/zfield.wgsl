@@ -206,27 +206,95 @@ fn fs_zfield_blend(in: ZOut) -> ZFragment {
     return z_fragment(in, false);
 }
 
+// BN12 §5 steps 2–4 for the view ray through quad point `p` (model space) along `r`: p_v, the
+// point q where iteration 2 sampled (albedo and normal are read there), the opacity α_v and
+// ambient occlusion δ_v; `alpha_v` is 0 where the ray misses the tree (iteration 1's opacity
+// in `alpha_1`).
+struct ZHit {
+    pv: vec3<f32>,
+    q: vec3<f32>,
+    alpha_1: f32,
+    alpha_v: f32,
+    delta_v: f32,
+};
+
+fn z_reconstruct(sp: ZSpecies, views: vec3<u32>, w: vec3<f32>, p: vec3<f32>, r: vec3<f32>, lod: f32) -> ZHit {
+    var hit: ZHit;
+    hit.pv = p;
+    hit.q = p;
+    hit.alpha_v = 0.0;
+    hit.delta_v = 0.0;
+    // Step 3, iteration 1.
+    let z1 = zfield3(sp, views, w, p, lod);
+    hit.alpha_1 = z1.w;
+    if (z1.w < 0.004) {
+        return hit;
+    }
+    hit.q = p + r * plane_distance(sp, z1.x, z1.w);
+    // Step 4, iteration 2: p_v, its opacity α_v and ambient occlusion δ_v.
+    let z2 = zfield3(sp, views, w, hit.q, lod);
+    if (z2.w < 0.004) {
+        return hit;
+    }
+    hit.alpha_v = z2.w;
+    hit.pv = p + r * plane_distance(sp, z2.x, z2.w);
+    hit.delta_v = clamp(z2.z / z2.w, 0.0, 1.0);
+    return hit;
+}
+
+// BN12 §5 step 5: the light ray through p_v (model space, towards the sun `lm`) meets the plane
+// through o facing the sun at p′ and enters the tree at p_l (one iteration); `tau` is the
+// extinction along it (`opacity_scaled_tau`: τ times the optical depth the light view's
+// opacity implies, relative to an opaque chord — 1 for dense crowns, less through sparse ones).
+struct ZLight {
+    pl: vec3<f32>,
+    tau: f32,
+};
+
+fn z_light(sp: ZSpecies, views: vec3<u32>, w: vec3<f32>, pv: vec3<f32>, lm: vec3<f32>, lod: f32) -> ZLight {
+    let c = sp.centre_radius.xyz;
+    let p1 = pv - lm * dot(pv - c, lm);
+    let zl = zfield3(sp, views, w, p1, lod);
+    var out: ZLight;
+    out.pl = pv;
+    out.tau = zp.sun.x;
+    if (zl.w > 0.004) {
+        out.pl = p1 - lm * plane_distance(sp, zl.x, zl.w);
+        if (zp.atlas.w > 0.5) {
+            out.tau = out.tau * log(1.0 - min(zl.w, 0.99)) / log(0.01);
+        }
+    }
+    return out;
+}
+
+// The phase function of eq. 7 without `sun_scale`: isotropic, blended by `normal_weight`
+// towards the reference's leaf response at normal `n` (Lambert + diffuse transmission).
+fn phase_shape(n: vec3<f32>, l: vec3<f32>) -> f32 {
+    let ndl = dot(n, l);
+    let leaf = max(ndl, 0.0) + zp.atlas.z * max(-ndl, 0.0);
+    return mix(1.0, leaf / 0.34, zp.sky.z);
+}
+
+// Eq. 9's cylindrical hole: the sky seen `d` metres below the crown's top through a forest
+// of `density` trees per m².
+fn sky_hole(d: f32, density: f32) -> f32 {
+    return 1.0 / (1.0 + d * d * density * 0.25);
+}
+
 fn z_fragment(in: ZOut, masked: bool) -> ZFragment {
     let sp = z_species[in.views.w];
-    let c = sp.centre_radius.xyz;
     // Step 2: p, where the view ray meets the plane through o facing the eye (the quad).
     let p = instance_to_model(in.world, in.base_scale, in.rot);
     let eye = instance_to_model(frame.camera.xyz, in.base_scale, in.rot);
     let r = normalize(p - eye);
-    // Step 3, iteration 1.
-    let z1 = zfield3(sp, in.views.xyz, in.weights, p, in.lod);
-    if (z1.w < 0.004) {
+    let hit = z_reconstruct(sp, in.views.xyz, in.weights, p, r, in.lod);
+    if (hit.alpha_v < 0.004) {
         discard;
     }
-    let q = p + r * plane_distance(sp, z1.x, z1.w);
-    // Step 4, iteration 2: p_v, its opacity α_v and ambient occlusion δ_v.
-    let z2 = zfield3(sp, in.views.xyz, in.weights, q, in.lod);
-    let alpha_v = z2.w;
-    if (alpha_v < 0.004) {
-        discard;
-    }
-    let pv = p + r * plane_distance(sp, z2.x, alpha_v);
-    let delta_v = clamp(z2.z / alpha_v, 0.0, 1.0);
+    let pv = hit.pv;
+    let q = hit.q;
+    let alpha_v = hit.alpha_v;
+    let delta_v = hit.delta_v;
     // Coverage: presence (LOD cross-fade) by optical depth, then the tree's mask.
     let a = presence_alpha(alpha_v, in.rot.w);
     if (masked && a <= mask_threshold(in.pos.xy, in.base_scale, in.rot.z)) {
@@ -236,21 +304,10 @@ fn z_fragment(in: ZOut, masked: bool) -> ZFragment {
         discard;
     }
     let world = instance_to_world(pv, in.base_scale, in.rot);
-    // Step 5: the light ray through p_v meets the plane through o facing the sun at p', and
-    // enters the tree at p_l (one iteration).
     let lm = instance_dir_to_model(frame.sun_dir.xyz, in.rot);
-    let p1 = pv - lm * dot(pv - c, lm);
-    let zl = zfield3(sp, in.light_views.xyz, in.light_weights, p1, in.lod);
-    var pl = pv;
-    var tau = zp.sun.x;
-    if (zl.w > 0.004) {
-        pl = p1 - lm * plane_distance(sp, zl.x, zl.w);
-        // `opacity_scaled_tau`: τ times the optical depth the light view's opacity implies,
-        // relative to an opaque chord (1 for dense crowns; less through sparse ones).
-        if (zp.atlas.w > 0.5) {
-            tau = tau * log(1.0 - min(zl.w, 0.99)) / log(0.01);
-        }
-    }
+    let light = z_light(sp, in.light_views.xyz, in.light_weights, pv, lm, in.lod);
+    let pl = light.pl;
+    let tau = light.tau;
     let path_m = max(dot(pl - pv, lm), 0.0) * in.base_scale.w;
     let world_l = instance_to_world(pl, in.base_scale, in.rot);
     // Albedo and normal where the second iteration sampled.
@@ -263,16 +320,14 @@ fn z_fragment(in: ZOut, masked: bool) -> ZFragment {
     // Eq. 7: ρ p(v, l) exp(−τ‖p_l − p_v‖) F(v, l) V(p_l) L_sun; the phase function is
     // isotropic (scaled by `sun_scale`), optionally blended towards the reference's leaf
     // response at the baked normal (`normal_weight`).
-    let ndl = dot(n, l);
-    let leaf = max(ndl, 0.0) + zp.atlas.z * max(-ndl, 0.0);
-    let phase = zp.sun.y * mix(1.0, leaf / 0.34, zp.sky.z);
+    let phase = zp.sun.y * phase_shape(n, l);
     let sun = frame.sun_color.rgb * albedo * phase * exp(-tau * path_m) * hotspot(v, l)
         * sun_visibility(world_l, vec3<f32>(0.0));
     // Eq. 9: sky × δ_v × the cylindrical hole of the local density, d below the crown's top
     // (the slope term (1 + n·u_z)/2 is 1: the terrain normal is not known here).
     let top = instance_to_world(sp.bbox_max.xyz, in.base_scale, in.rot).y;
     let d = max(top - world.y, 0.0);
-    let hole = 1.0 / (1.0 + d * d * zp.sky.y * 0.25);
+    let hole = sky_hole(d, zp.sky.y);
     let sky = albedo * sky_light(vec3<f32>(0.0, 1.0, 0.0)) * zp.sky.x * delta_v * hole;
     let lit = debug_tint(apply_fog(sun + sky, world), world, TECHNIQUE_ZFIELD);
     var out: ZFragment;
