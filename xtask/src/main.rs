@@ -278,7 +278,8 @@ fn test() -> Result<(), String> {
     let mut tests = cargo();
     tests.args(["test", "--workspace"]);
     run(tests, "cargo test --workspace")?;
-    // The render tests again on the GL backend (the cross-backend test already ran both).
+    // The render tests again on the GL backend (the cross-backend tests, `*_as_vulkan_does`,
+    // already ran both).
     let mut gl = cargo();
     gl.env("WGPU_BACKEND", "gl").args([
         "test",
@@ -286,7 +287,7 @@ fn test() -> Result<(), String> {
         "sylvan-render",
         "--",
         "--skip",
-        "gl_bakes_and_draws_as_vulkan_does",
+        "as_vulkan_does",
     ]);
     run(gl, "WGPU_BACKEND=gl cargo test --package sylvan-render")?;
     report_disk("after the workspace tests");

@@ -250,6 +250,10 @@ pub fn shader_sources() -> Vec<(&'static str, String)> {
             "shadermap_measure",
             crate::technique::shadermap::measure::shader_source(),
         ),
+        (
+            "shadermap_probe",
+            crate::technique::shadermap::gpu::probe_source(),
+        ),
     ];
     for e in crate::technique::registry::REGISTRY {
         out.extend((e.shaders)());

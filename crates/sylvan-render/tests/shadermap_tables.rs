@@ -328,3 +328,185 @@ fn tables_of_a_real_plant_are_cached_and_remeasured_when_damaged() {
     assert!(e.to_string().contains("peak density"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn the_table_key_follows_what_was_measured() {
+    use sylvan_render::technique::shadermap::measure::table_key;
+    let tree = common::test_tree();
+    let z = sphere_asset(0.5);
+    let p = small_tables();
+    let base = mix(&tree, &z, 7.0, 0.01);
+    let key = table_key(&base, &p);
+    let with = |draw: ZFieldDrawParams| {
+        table_key(
+            &ForestMix {
+                zfield_draw: draw,
+                ..mix(&tree, &z, 7.0, 0.01)
+            },
+            &p,
+        )
+    };
+    let d = ZFieldDrawParams::default;
+    // What the measurement lights the trees with re-measures ...
+    for changed in [
+        ZFieldDrawParams { tau: 1.0, ..d() },
+        ZFieldDrawParams {
+            normal_weight: 0.2,
+            ..d()
+        },
+        ZFieldDrawParams {
+            opacity_scaled_tau: false,
+            ..d()
+        },
+    ] {
+        assert_ne!(with(changed), key);
+    }
+    // ... what the shader applies at run time does not.
+    for same in [
+        ZFieldDrawParams { a1: 0.5, ..d() },
+        ZFieldDrawParams { a2: 5.0, ..d() },
+        ZFieldDrawParams {
+            sun_scale: 1.0,
+            ..d()
+        },
+        ZFieldDrawParams {
+            sky_scale: 2.0,
+            ..d()
+        },
+    ] {
+        assert_eq!(with(same), key);
+    }
+    // The patch, the mix and the z-field bake all count.
+    assert_ne!(
+        table_key(
+            &base,
+            &ShaderMapBakeParams {
+                seed: 9,
+                ..p.clone()
+            }
+        ),
+        key
+    );
+    assert_ne!(table_key(&mix(&tree, &z, 7.5, 0.01), &p), key);
+    assert_ne!(table_key(&mix(&tree, &z, 7.0, 0.02), &p), key);
+    let other = ForestMix {
+        zfield_bake: ZFieldBakeParams {
+            ao_density: 2.0,
+            ..zfield_params()
+        },
+        ..mix(&tree, &z, 7.0, 0.01)
+    };
+    assert_ne!(table_key(&other, &p), key);
+}
+
+#[test]
+fn the_gpu_samples_the_tables_as_measured_and_keeps_the_hotspot_at_backscatter() {
+    use sylvan_render::technique::shadermap::gpu::GpuTables;
+    use sylvan_render::technique::shadermap::ridge::RidgeTables;
+    let gpu = gpu();
+    let tree = common::test_tree();
+    let z = sphere_asset(0.5);
+    let t = measure_tables(
+        &gpu,
+        &mix(&tree, &z, 2.2 * 0.5 * z.radius, 1.0),
+        &small_tables(),
+        &mut |_, _| {},
+    )
+    .unwrap();
+    let ridge = RidgeTables::new(&t);
+    let g = GpuTables::upload(&gpu, &t).unwrap();
+    let (nt, np, nl) = (t.theta as usize, t.phi as usize, t.lambdas.len());
+    // Every diagonal node (θv = θl) comes back as measured, to f16's precision.
+    let mut points = Vec::new();
+    let mut expected = Vec::new();
+    for l in 0..nl {
+        for k in 0..nt {
+            for m in 0..np {
+                let th = t.theta_at(k as u32);
+                points.push([th, th, t.phi_at(m as u32), t.lambdas[l]]);
+                expected.push([
+                    t.g_node(l, k, k, m),
+                    t.t_node(l, k, k, m),
+                    t.e_node(l, k),
+                    t.d[l],
+                ]);
+            }
+        }
+    }
+    let got = g.probe(&gpu, &points).unwrap();
+    for ((p, e), o) in points.iter().zip(&expected).zip(&got) {
+        for c in 0..4 {
+            assert!(
+                (o[c] - e[c]).abs() <= 2e-3 * e[c].abs().max(1.0),
+                "node {p:?}: component {c} is {}, measured {}",
+                o[c],
+                e[c]
+            );
+        }
+        let cpu = ridge.sample(p[0], p[1], p[2], p[3]);
+        assert!((cpu[0] - e[0]).abs() < 1e-5 && (cpu[1] - e[1]).abs() < 1e-5);
+    }
+    // Between nodes the GPU's filtering is the CPU twin's multilinear interpolation.
+    let mut rng = sylvan_plant::rng::Rng::new(7);
+    let mut r = || rng.next_f64() as f32;
+    let lmax = *t.lambdas.last().unwrap();
+    let random: Vec<[f32; 4]> = (0..500)
+        .map(|_| {
+            [
+                r() * 1.5707964,
+                r() * 1.5707964,
+                r() * std::f32::consts::PI,
+                r() * lmax * 1.1,
+            ]
+        })
+        .collect();
+    let got = g.probe(&gpu, &random).unwrap();
+    let mut worst = 0.0f32;
+    for (p, o) in random.iter().zip(&got) {
+        let cpu = ridge.sample(p[0], p[1], p[2], p[3]);
+        worst = worst.max((o[0] - cpu[0]).abs()).max((o[1] - cpu[1]).abs());
+    }
+    assert!(worst < 4e-3, "GPU and CPU lookups differ by up to {worst}");
+    // The hotspot: θl fixed between nodes, θv swept in 0.25° steps, the sun behind the viewer —
+    // on tables of BN12's zenith resolution (16 nodes, 6° apart) the ground seen and lit peaks
+    // where the view meets the sun's direction. (On these 5-node test tables it need not: at
+    // θl = 61° it peaks at 55.5°, where the linear interpolation of Gd along θ̄ between 45° and
+    // 67.5° outweighs the hotspot's fall along δ.)
+    let fine = ShaderMapBakeParams {
+        theta: 16,
+        phi: 2,
+        lambda: 2,
+        patch_px: 64,
+        ..small_tables()
+    };
+    let t = measure_tables(
+        &gpu,
+        &mix(&tree, &z, 2.2 * 0.5 * z.radius, 1.0),
+        &fine,
+        &mut |_, _| {},
+    )
+    .unwrap();
+    let ridge = RidgeTables::new(&t);
+    let g = GpuTables::upload(&gpu, &t).unwrap();
+    let lmax = *t.lambdas.last().unwrap();
+    // (Beyond 70° this dense stand, λA = 0.57, leaves under 0.2 % of the ground lit: no peak.)
+    for tl_deg in [20.0f32, 35.0, 50.0, 61.0, 70.0] {
+        let tl = tl_deg.to_radians();
+        let sweep: Vec<[f32; 4]> = (0..=240)
+            .map(|i| [(15.0 + 0.25 * i as f32).to_radians(), tl, 0.0, lmax])
+            .collect();
+        let got = g.probe(&gpu, &sweep).unwrap();
+        let best = |v: &dyn Fn(usize) -> f32| {
+            (0..sweep.len())
+                .max_by(|&a, &b| v(a).total_cmp(&v(b)))
+                .map(|i| sweep[i][0].to_degrees())
+                .unwrap()
+        };
+        let gpu_peak = best(&|i| got[i][0]);
+        let cpu_peak = best(&|i| ridge.sample(sweep[i][0], tl, 0.0, lmax)[0]);
+        assert!(
+            (gpu_peak - tl_deg).abs() <= 0.5 && (cpu_peak - tl_deg).abs() <= 0.5,
+            "θl {tl_deg}°: 𝔾 peaks at θv {gpu_peak}° on the GPU, {cpu_peak}° on the CPU"
+        );
+    }
+}

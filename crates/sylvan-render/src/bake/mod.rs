@@ -67,7 +67,7 @@ fn raw_format(gpu: &Gpu) -> wgpu::TextureFormat {
 }
 
 /// `f16` bits → `f32` (the `Rgba16Float` read-back).
-fn f16_to_f32(h: u16) -> f32 {
+pub(crate) fn f16_to_f32(h: u16) -> f32 {
     let sign = if h & 0x8000 != 0 { -1.0 } else { 1.0 };
     let exp = (h >> 10) & 0x1f;
     let frac = (h & 0x3ff) as f32;

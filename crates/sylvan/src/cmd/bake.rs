@@ -154,7 +154,14 @@ fn tables(args: BakeCmdArgs) -> anyhow::Result<()> {
     let file = r.path.as_ref().map(|p| p.display().to_string());
     let (renders, evaluations) = sylvan_render::technique::shadermap::measure::work(&params);
     if args.json {
-        let nt = t.theta as usize;
+        let (nt, np) = (t.theta as usize, t.phi as usize);
+        // Per density node, per zenith θ (view and sun at the same zenith): φ = 0 is the
+        // hotspot, φ = 180° looks into the sun.
+        let slice = |f: &dyn Fn(usize, usize) -> f32| -> Vec<Vec<f32>> {
+            (0..t.lambdas.len())
+                .map(|l| (0..nt).map(|v| f(l, v)).collect())
+                .collect()
+        };
         let mut json = serde_json::json!({
             "technique": "shadermap",
             "species": r.plant,
@@ -170,6 +177,10 @@ fn tables(args: BakeCmdArgs) -> anyhow::Result<()> {
             "crown_area_m2": t.crown_area_m2,
             "h": t.h,
             "gd_by_lambda": t.gd.chunks(nt).collect::<Vec<_>>(),
+            "g_facing_sun_by_lambda": slice(&|l, v| t.g_node(l, v, v, np - 1)),
+            "t_hotspot_by_lambda": slice(&|l, v| t.t_node(l, v, v, 0)),
+            "t_facing_sun_by_lambda": slice(&|l, v| t.t_node(l, v, v, np - 1)),
+            "e_by_lambda": t.e.chunks(nt).collect::<Vec<_>>(),
             "d_by_lambda": t.d,
         });
         if let (Some(obj), Some(why)) = (json.as_object_mut(), &r.stale) {

@@ -47,7 +47,9 @@
 //!   the terrain's own tiling, so the wrap-around is exact. Density nodes are the patch's
 //!   realised densities (n trees / area).
 
+pub mod gpu;
 pub mod measure;
+pub mod ridge;
 pub mod scene;
 pub mod tables;
 
