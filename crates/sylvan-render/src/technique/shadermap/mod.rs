@@ -13,8 +13,13 @@
 //! (eq. 21 with `zfield`'s eq. 9) — measured by rendering `zfield` forest patches, cached like
 //! every bake ([`measure::load_or_measure`]).
 //!
-//! **Not built yet**: ℂ, the ridge-aligned storage and f16 GPU packing, the field on the
-//! terrain, coverage tiles, seeds on the GPU, the transitions of §7.
+//! On the GPU ([`gpu`], [`ridge`], `field_tables.wgsl`): 𝔾 and 𝕋 resampled onto ridge-aligned
+//! axes (θ̄ = (θv + θl)/2, δ = θv − θl on nodes crowding δ = 0, φ, λ) in an `Rg16Float` 3D
+//! texture (139,264 B at BN12's resolution), 𝔼 and 𝔻 in a 2D one (1,024 B); two fetches per
+//! lookup.
+//!
+//! **Not built yet**: ℂ, the field on the terrain (eq. 2–5, 13–21), coverage tiles, seeds on
+//! the GPU, the transitions of §7.
 //!
 //! **Deviations from BN12**, each stated:
 //! - The patch is drawn unscaled and each table direction `v′` of the transformed space
@@ -42,6 +47,10 @@
 //! - 𝔾 at the 90° node is analytic (no ground is seen through an endless forest at grazing
 //!   angles); the directions rendered are capped at 87° real zenith (𝕋 and 𝔼 at 90° are
 //!   measured there).
+//! - Stored on ridge-aligned axes (θ̄, δ) rather than (θv, θl): multilinear interpolation on
+//!   (θv, θl, φ) puts the hotspot ridge on cell diagonals. On BN12's 16 zenith nodes the
+//!   interpolated 𝔾 then peaks exactly at θv = θl (0.25° sweeps, θl 20°–80°); on coarse tables
+//!   (5 nodes) the slope of Gd along θ̄ can still pull the peak off it.
 //! - One table set for the scene's species mix, h and A area-weighted over it (BN12 §10 allows
 //!   per-mix sets); the patch is a periodic Poisson tile with the scene's pattern radius, not
 //!   the terrain's own tiling, so the wrap-around is exact. Density nodes are the patch's
