@@ -246,14 +246,6 @@ pub fn shader_sources() -> Vec<(&'static str, String)> {
         ("sky", with_frame(include_str!("shaders/sky.wgsl"))),
         ("terrain", with_frame(include_str!("shaders/terrain.wgsl"))),
         ("bake", crate::bake::shader_source()),
-        (
-            "shadermap_measure",
-            crate::technique::shadermap::measure::shader_source(),
-        ),
-        (
-            "shadermap_probe",
-            crate::technique::shadermap::gpu::probe_source(),
-        ),
     ];
     for e in crate::technique::registry::REGISTRY {
         out.extend((e.shaders)());

@@ -397,7 +397,7 @@ impl Renderer {
         };
         let renderer = Self {
             sky: SkyPass::new(gpu, &frame),
-            terrain: TerrainPass::new(gpu, &frame, t),
+            terrain: TerrainPass::new(gpu, &frame, t, technique.field()),
             frame,
             technique,
             bake_reports,

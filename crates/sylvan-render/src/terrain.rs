@@ -24,11 +24,19 @@ pub struct TerrainPass {
     index_count: u32,
     main: wgpu::RenderPipeline,
     shadow: wgpu::RenderPipeline,
+    /// The forest field's group 1 (BN12's shader-map), when the technique has one.
+    field: Option<wgpu::BindGroup>,
 }
 
 impl TerrainPass {
-    /// Uploads `terrain` (resampled to at most [`MAX_DRAWN_SIDE`] per side).
-    pub fn new(gpu: &Gpu, frame: &FrameResources, terrain: &Terrain) -> Self {
+    /// Uploads `terrain` (resampled to at most [`MAX_DRAWN_SIDE`] per side); with `field` the
+    /// main pipeline shades it as forest (`fs_terrain_forest`).
+    pub fn new(
+        gpu: &Gpu,
+        frame: &FrameResources,
+        terrain: &Terrain,
+        field: Option<&crate::technique::shadermap::field::ForestField>,
+    ) -> Self {
         let cols = terrain.resolution[0].clamp(2, MAX_DRAWN_SIDE);
         let rows = terrain.resolution[1].clamp(2, MAX_DRAWN_SIDE);
         let mut verts = Vec::with_capacity((cols * rows) as usize);
@@ -64,11 +72,15 @@ impl TerrainPass {
                 contents: bytemuck::cast_slice(&idx),
                 usage: wgpu::BufferUsages::INDEX,
             });
-        let module = sylvan_gpu::shader(
-            gpu,
-            "terrain",
-            &pipeline::with_frame(include_str!("shaders/terrain.wgsl")),
-        );
+        let source = match field {
+            Some(_) => crate::technique::shadermap::field::terrain_source(),
+            None => pipeline::with_frame(include_str!("shaders/terrain.wgsl")),
+        };
+        let module = sylvan_gpu::shader(gpu, "terrain", &source);
+        let main_layouts: Vec<&wgpu::BindGroupLayout> = match field {
+            Some(f) => vec![&frame.main_layout, &f.layout],
+            None => vec![&frame.main_layout],
+        };
         let layout = wgpu::VertexBufferLayout {
             array_stride: std::mem::size_of::<GpuTerrainVertex>() as u64,
             step_mode: wgpu::VertexStepMode::Vertex,
@@ -79,10 +91,14 @@ impl TerrainPass {
             gpu,
             &PipelineSpec {
                 label: "terrain_pipeline",
-                layouts: &[&frame.main_layout],
+                layouts: &main_layouts,
                 module: &module,
                 vs: "vs_terrain",
-                fs: Some("fs_terrain"),
+                fs: Some(if field.is_some() {
+                    "fs_terrain_forest"
+                } else {
+                    "fs_terrain"
+                }),
                 buffers: &buffers,
                 pass: PassKind::Main,
                 target: &frame.target,
@@ -113,6 +129,7 @@ impl TerrainPass {
             index_count: idx.len() as u32,
             main,
             shadow,
+            field: field.map(|f| f.bind.clone()),
         }
     }
 
@@ -129,6 +146,9 @@ impl TerrainPass {
     /// Records the terrain into a main (`shadow = false`) or shadow pass; returns draw calls.
     pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, shadow: bool) -> u32 {
         pass.set_pipeline(if shadow { &self.shadow } else { &self.main });
+        if let (false, Some(field)) = (shadow, &self.field) {
+            pass.set_bind_group(1, field, &[]);
+        }
         pass.set_vertex_buffer(0, self.vertices.slice(..));
         pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
         pass.draw_indexed(0..self.index_count, 0, 0..1);

@@ -535,6 +535,27 @@ fn bake_measures_and_caches_shadermap_tables_for_a_scene() {
     let again = json_of(&sylvan(&args, &dir));
     assert_eq!(again["from_cache"], true);
     assert_eq!(again["gd_by_lambda"], first["gd_by_lambda"]);
+    // `--out` names the tables' file (the z-field bakes stay in the cache): read back next time.
+    let out_file = dir.join("tables.sylbake");
+    let mut with_out: Vec<&str> = args.to_vec();
+    with_out.extend(["--out", out_file.to_str().unwrap()]);
+    let written = json_of(&sylvan(&with_out, &dir));
+    assert_eq!(written["file"], out_file.to_str().unwrap());
+    let read = json_of(&sylvan(&with_out, &dir));
+    assert_eq!(read["from_cache"], true, "{read}");
+    // The scene's own [technique.shadermap] table applies (another patch seed: other tables,
+    // not the cached ones), under --set (theta stays 4).
+    let own = dir.join("own.toml");
+    std::fs::write(
+        &own,
+        format!("{TINY}\n[technique.shadermap]\nseed = 7\ntheta = 6\n"),
+    )
+    .unwrap();
+    let mut scene_args: Vec<&str> = args.to_vec();
+    scene_args[4] = own.to_str().unwrap();
+    let from_scene = json_of(&sylvan(&scene_args, &dir));
+    assert_eq!(from_scene["from_cache"], false, "{from_scene}");
+    assert_eq!(from_scene["tables"]["theta"], 4, "--set shadermap.theta=4 wins");
     // A bad table key and a plant where a scene is wanted are one-line errors.
     let out = sylvan(
         &[

@@ -37,15 +37,20 @@ fn vnoise(p: vec2<f32>) -> f32 {
     return mix(mix(a, b, u.x), mix(c, d, u.x), u.y);
 }
 
-@fragment
-fn fs_terrain(in: TerrainOut) -> @location(0) vec4<f32> {
-    let n = normalize(in.normal);
-    let variation = vnoise(in.world.xz * 0.02) * 0.6 + vnoise(in.world.xz * 0.11) * 0.4;
-    // Meadow to forest-floor tones (linear albedo), varied at two scales.
+// The ground's linear albedo at `world` with normal `n`: meadow to forest-floor tones varied
+// at two scales, rock where steep (shared with `shadermap`'s `fs_terrain_forest`).
+fn terrain_albedo(world: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let variation = vnoise(world.xz * 0.02) * 0.6 + vnoise(world.xz * 0.11) * 0.4;
     let grass = mix(vec3<f32>(0.040, 0.058, 0.018), vec3<f32>(0.085, 0.080, 0.036), variation);
     let rock = vec3<f32>(0.13, 0.12, 0.105);
     let steep = smoothstep(0.72, 0.55, n.y);
-    let albedo = mix(grass, rock, steep);
+    return mix(grass, rock, steep);
+}
+
+@fragment
+fn fs_terrain(in: TerrainOut) -> @location(0) vec4<f32> {
+    let n = normalize(in.normal);
+    let albedo = terrain_albedo(in.world, n);
     let l = frame.sun_dir.xyz;
     let ndl = max(dot(n, l), 0.0);
     let vis = select(sun_visibility(in.world, n * 0.15), 0.0, ndl <= 0.0);

@@ -47,9 +47,9 @@ pub struct Band {
 fn member(name: &str, place: &str) -> Result<&'static str, RenderError> {
     let e =
         registry::find(name.trim()).map_err(|e| RenderError::Option(format!("{place}: {e}")))?;
-    if e.kind == Kind::Chain {
+    if e.kind != Kind::PerTree {
         return Err(RenderError::Option(format!(
-            "{place}: '{}' cannot be a band of the chain — use one of: {}",
+            "{place}: '{}' cannot be a band of the chain yet — use one of: {}",
             e.name,
             chainable().join(", ")
         )));
@@ -61,7 +61,7 @@ fn member(name: &str, place: &str) -> Result<&'static str, RenderError> {
 pub fn chainable() -> Vec<&'static str> {
     registry::REGISTRY
         .iter()
-        .filter(|e| e.kind != Kind::Chain)
+        .filter(|e| e.kind == Kind::PerTree)
         .map(|e| e.name)
         .collect()
 }

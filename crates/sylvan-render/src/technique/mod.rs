@@ -224,6 +224,11 @@ pub trait Technique: Send {
     fn list_windows(&self, _pixels_per_metre: f32) -> Option<Vec<[f32; 4]>> {
         None
     }
+    /// The forest field the terrain is shaded with (BN12's shader-map), if the technique has
+    /// one: the renderer builds the terrain's pipeline with it.
+    fn field(&self) -> Option<&shadermap::field::ForestField> {
+        None
+    }
 }
 
 /// What a technique may look at once per frame, before any pass is recorded.

@@ -91,6 +91,7 @@ pub static REGISTRY: &[Entry] = &[
     super::octahedral::ENTRY,
     super::bcloud::ENTRY,
     super::zfield::ENTRY,
+    super::shadermap::ENTRY,
     super::lod::ENTRY,
 ];
 
@@ -151,13 +152,8 @@ pub fn wgsl_prelude() -> String {
 /// Checks every setting against its technique's schema: a setting for an unknown technique,
 /// an unknown key or a bad value is an error naming where it was written.
 pub fn check_settings(settings: &[Setting]) -> Result<(), RenderError> {
-    let tables: Vec<&Setting> = settings
-        .iter()
-        .filter(|s| s.technique == "shadermap")
-        .collect();
-    super::shadermap::scene::check_settings(&tables)?;
     for s in settings {
-        if s.technique != "shadermap" && find(&s.technique).is_err() {
+        if find(&s.technique).is_err() {
             return Err(RenderError::Param(format!(
                 "{}: unknown technique `{}`{} — use one of: {}",
                 s.origin,

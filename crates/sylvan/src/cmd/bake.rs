@@ -131,12 +131,21 @@ fn tables(args: BakeCmdArgs) -> anyhow::Result<()> {
             "--technique shadermap bakes for a scene's species mix, not one plant — pass --scene FILE (or nothing for the built-in scene)"
         );
     }
-    let settings = args.bake.settings()?;
     let scene = super::common::load_scene(args.scene.as_deref())?;
+    // The scene's own `[technique.*]` tables, then `--set`, as `render` applies them.
+    let settings: Vec<_> = scene
+        .technique_params
+        .iter()
+        .cloned()
+        .chain(args.bake.settings()?)
+        .collect();
+    registry::check_settings(&settings)?;
     let plants = sylvan_render::load_plants(&scene)?;
+    // `--out` names the tables' file; the z-field bakes stay in the cache.
+    let cache = args.bake.cache();
     let policy = match &args.out {
         Some(f) => CachePolicy::File(f.clone()),
-        None => args.bake.cache(),
+        None => cache.clone(),
     };
     let gpu = sylvan_gpu::Gpu::new()?;
     let bar = BakeBar::new();
@@ -146,6 +155,7 @@ fn tables(args: BakeCmdArgs) -> anyhow::Result<()> {
         &scene,
         &plants,
         &settings,
+        &cache,
         &policy,
         &mut |what, d, n| bar.update(what, d, n),
     )
@@ -170,6 +180,7 @@ fn tables(args: BakeCmdArgs) -> anyhow::Result<()> {
             "file": file,
             "file_bytes": r.path.as_ref().and_then(|p| std::fs::metadata(p).ok()).map_or(0, |m| m.len()),
             "tables": {"theta": t.theta, "phi": t.phi, "lambda": t.lambdas.len()},
+            // Of the measurement (also when the tables were read from the cache).
             "renders": renders,
             "evaluations": evaluations,
             "samples": t.samples,

@@ -45,7 +45,8 @@ fn table_delta_index(delta: f32) -> f32 {
     return c + c * sign(delta) * sqrt(min(abs(delta) / TABLE_HALF_PI, 1.0));
 }
 
-// (𝔾, 𝕋) at transformed zeniths `tv`, `tl`, azimuth `phi` between them and density `lambda`.
+// (𝔾, 𝕋) at transformed zeniths `tv`, `tl`, azimuth `phi` between them (in [0, π]; larger
+// values are clamped, not folded) and density `lambda`.
 fn table_gt(tv: f32, tl: f32, phi: f32, lambda: f32) -> vec2<f32> {
     let nt = table_info.dims.x;
     let nd = table_info.dims.y;

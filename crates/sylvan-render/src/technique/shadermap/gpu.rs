@@ -78,6 +78,9 @@ pub fn f32_to_f16(v: f32) -> u16 {
 impl GpuTables {
     /// Uploads `t` (resampled onto the ridge-aligned axes).
     pub fn upload(gpu: &Gpu, t: &ShaderMapTables) -> Result<Self, RenderError> {
+        t.check().map_err(|why| {
+            RenderError::Option(format!("shadermap tables: {why} — re-bake them"))
+        })?;
         if t.lambdas.len() > MAX_LAMBDAS {
             return Err(RenderError::Option(format!(
                 "shadermap tables with {} density nodes, more than the {MAX_LAMBDAS} the shader holds — re-bake with shadermap.lambda ≤ {MAX_LAMBDAS}",

@@ -34,7 +34,7 @@ use wgpu::util::DeviceExt;
 /// Name of the tables in the cache (`<species>-shadermap-<hash>.sylbake`).
 pub const NAME: &str = "shadermap";
 /// Version of the tables' payload and of the measurement; bump when either changes.
-pub const FORMAT_VERSION: u32 = 2;
+pub const FORMAT_VERSION: u32 = 3;
 /// Most trees in one patch (before the copies that cover the wrap-around).
 pub const MAX_PATCH_TREES: usize = 20_000;
 /// Directions steeper than this are measured at it (the sheared projection degenerates at
@@ -110,6 +110,47 @@ fn crown(s: &MixSpecies<'_>) -> Result<Crown, RenderError> {
         area_m2: (alpha * texel * texel) as f32 * mean_s2,
         height_m: extent * 0.5 * (s0 + s1),
     })
+}
+
+/// sRGB byte to linear.
+fn srgb_to_linear(b: u8) -> f64 {
+    let s = b as f64 / 255.0;
+    if s <= 0.04045 {
+        s / 12.92
+    } else {
+        ((s + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// A species' mean albedo (linear RGB): its views' premultiplied sRGB albedo decoded and
+/// divided by their coverage, over every view.
+fn mean_albedo(z: &ZFieldBaked) -> [f64; 3] {
+    let (mut sum, mut alpha) = ([0.0f64; 3], 0.0f64);
+    for v in &z.views {
+        if let Some(level) = v.levels.first() {
+            for p in level.color.chunks_exact(4) {
+                for c in 0..3 {
+                    sum[c] += srgb_to_linear(p[c]);
+                }
+                alpha += p[3] as f64 / 255.0;
+            }
+        }
+    }
+    sum.map(|s| (s / alpha.max(1e-9)).clamp(0.0, 1.0))
+}
+
+/// The mix's mean tree albedo: species by share × crown area.
+fn mix_albedo(mix: &ForestMix<'_>, weights: &[f32]) -> Result<[f32; 3], RenderError> {
+    let (mut sum, mut total) = ([0.0f64; 3], 0.0f64);
+    for (s, w) in mix.species.iter().zip(weights) {
+        let k = *w as f64 * crown(s)?.area_m2 as f64;
+        let a = mean_albedo(s.zfield);
+        for c in 0..3 {
+            sum[c] += k * a[c];
+        }
+        total += k;
+    }
+    Ok(sum.map(|v| (v / total.max(1e-12)) as f32))
 }
 
 /// The mix's mean crown area A and shape h (area-weighted), and its normalised weights.
@@ -289,12 +330,21 @@ fn patch(
     weights: &[f32],
 ) -> Result<Patch, RenderError> {
     let side = mix.radius_m * params.patch_radii as f32;
-    let expected = side * side / (mix.radius_m * mix.radius_m);
-    if expected > 2.0 * MAX_PATCH_TREES as f32 {
+    // The evaluation finds a tree's copy of the tile from a point of its crown: every crown
+    // must lie within half a tile of its trunk.
+    let widest = mix
+        .species
+        .iter()
+        .map(|s| {
+            let z = s.zfield;
+            let scale = s.height_m[1] / s.plant.bbox_max[1].max(1e-3);
+            (z.centre[0].hypot(z.centre[2]) + z.radius) * scale
+        })
+        .fold(0.0f32, f32::max);
+    if widest >= 0.5 * side {
         return Err(RenderError::Option(format!(
-            "shadermap patch_radii {}: about {expected:.0} candidates, more than {} — lower it",
-            params.patch_radii,
-            2 * MAX_PATCH_TREES
+            "shadermap patch_radii {}: a {side:.0} m patch is too small for crowns reaching {widest:.1} m from their trunks — raise patch_radii",
+            params.patch_radii
         )));
     }
     let points = sylvan_scene::poisson_tile(side, mix.radius_m, params.seed as u64);
@@ -384,6 +434,12 @@ const SKY_ONE: f64 = 16384.0;
 /// Samples per side of the G-buffer grid 𝕋 and 𝔼 are evaluated on (every `patch_px / 128`-th
 /// texel): 16,384 per (view, light) pair, of which the trees' share counts.
 const TREE_SAMPLES_SIDE: u32 = 128;
+
+/// The most table directions (`lights` in `measure.wgsl`): `1 + (32 − 1) · 32` fit.
+const MAX_DIRECTIONS: usize = 1024;
+
+/// Most bytes of patch instances drawn for one density node.
+const MAX_DRAWN_BYTES: u64 = 256 << 20;
 
 /// The most directions drawn into one atlas (8 × 8 tiles).
 const ATLAS_TILES: u32 = 64;
@@ -532,7 +588,7 @@ impl Measurer {
                 layout::texture(1, cs, uint, d2),
                 layout::texture(2, cs, uint, d2),
                 layout::storage(3, cs),
-                layout::storage(4, cs),
+                layout::uniform(4, cs),
                 wgpu::BindGroupLayoutEntry {
                     binding: 5,
                     visibility: cs,
@@ -657,12 +713,22 @@ impl Measurer {
     }
 
     /// The tile's first `n` trees, copied wherever `dirs` can see them from the tile.
-    fn drawn(&self, gpu: &Gpu, p: &Patch, n: usize, dirs: &[Vec3]) -> Drawn {
+    fn drawn(&self, gpu: &Gpu, p: &Patch, n: usize, dirs: &[Vec3]) -> Result<Drawn, RenderError> {
         let k = dirs
             .iter()
             .map(|d| *copy_range(p, (d.x / d.y).abs().max((d.z / d.y).abs())).end())
             .max()
             .unwrap_or(1);
+        let bytes =
+            ((2 * k + 1) as u64).pow(2) * n as u64 * std::mem::size_of::<GpuTreeInstance>() as u64;
+        let limit = MAX_DRAWN_BYTES.min(gpu.device.limits().max_buffer_size);
+        if bytes > limit {
+            return Err(RenderError::Option(format!(
+                "shadermap: the patch's copies along the grazing directions need {} MB of trees, more than {} MB — raise patch_radii (the trees are tall for the patch)",
+                bytes >> 20,
+                limit >> 20
+            )));
+        }
         let mut instances = Vec::with_capacity(((2 * k + 1) * (2 * k + 1)) as usize * n.max(1));
         for cz in -k..=k {
             for cx in -k..=k {
@@ -689,7 +755,7 @@ impl Measurer {
                     usage,
                 })
         };
-        Drawn {
+        Ok(Drawn {
             buffer: init(
                 "shadermap_measure_trees",
                 bytemuck::cast_slice(&instances),
@@ -702,7 +768,7 @@ impl Measurer {
             ),
             n,
             k,
-        }
+        })
     }
 
     /// Frame bind groups for `dirs` (one uniform block each).
@@ -841,11 +907,14 @@ impl Measurer {
             contents: &vec![0u8; entries * 12],
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         });
-        let light_dirs: Vec<[f32; 4]> = lights.iter().map(|d| d.extend(0.0).to_array()).collect();
+        let mut light_dirs = vec![[0.0f32; 4]; MAX_DIRECTIONS];
+        for (slot, d) in light_dirs.iter_mut().zip(lights) {
+            *slot = d.extend(0.0).to_array();
+        }
         let light_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("shadermap_measure_lights"),
             contents: bytemuck::cast_slice(&light_dirs),
-            usage: wgpu::BufferUsages::STORAGE,
+            usage: wgpu::BufferUsages::UNIFORM,
         });
         let per_batch = self.lights.tiles();
         let batches = nl.div_ceil(per_batch);
@@ -982,7 +1051,7 @@ fn frame_for(d: Vec3, p: &Patch, n: usize, px: u32) -> GpuFrame {
         n.max(1) as f32,
         px as f32 / p.side,
     ];
-    f.shadow_params = [1.0 / px as f32, 0.0, 0.0, 1.0];
+    f.shadow_params = [1.0 / px as f32, p.side / px as f32, 0.0, 1.0];
     f
 }
 
@@ -1024,6 +1093,7 @@ pub fn measure_tables(
         h,
         crown_area_m2: area,
         samples: px * px,
+        tree_albedo: mix_albedo(mix, &weights)?,
         g: vec![0.0; full],
         gd: vec![0.0; (nl * nt) as usize],
         d: vec![0.0; nl as usize],
@@ -1051,7 +1121,7 @@ pub fn measure_tables(
     let (ntu, npu) = (nt as usize, np as usize);
     for (l, &n) in counts.iter().enumerate() {
         progress(l, nl as usize);
-        let drawn = measurer.drawn(gpu, &p, n, &dirs);
+        let drawn = measurer.drawn(gpu, &p, n, &dirs)?;
         let (pairs, views) = if n > 0 {
             measurer.evaluate(gpu, &p, &drawn, &view_dirs, &dirs, t.lambdas[l])?
         } else {

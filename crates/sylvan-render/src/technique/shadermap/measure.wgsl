@@ -9,17 +9,19 @@
 // light map for the sun's); `measure_eval` then counts ground and lights tree points.
 // Appended to `zfield`'s shader (its bindings, the grid lookup and `zfield.wgsl`).
 // frame.view_proj: the sheared projection; frame.sun_dir.xyz: d; frame.shadow_params.x:
-// 1 / pixels of the patch (the casters' mip choice); frame.camera.w: pixels per metre of ground.
+// 1 / pixels of the patch; frame.camera.w: pixels per metre of ground.
 
-// ---- Tree G-buffers and light maps (𝕋 and 𝔼) ----
-// The same renders with the z-field's view ray reconstructed (BN12 §5 steps 2–4, the
-// `zfield` technique's own functions) at the same (texel, tree) threshold as the masks, so the
-// texels a G-buffer calls trees are exactly those the mask calls hidden. Depth: the highest
-// point along the ray is the first one from the sky (frame.camera.y: the patch's top;
-// frame.camera.z: trees per copy of the tile).
+// ---- G-buffers and light maps ----
+// The z-field's view ray reconstructed (BN12 §5 steps 2–4, the `zfield` technique's own
+// functions) where the (texel, tree) threshold keeps the tree. Depth: the highest point along
+// the ray is the first one from the sky (frame.camera.y: the patch's top; frame.camera.z:
+// trees per copy of the tile; frame.shadow_params.y: metres per ground texel).
 
 struct MeasureHit {
     ok: bool,
+    // Iteration 2 found the surface (else p_v is on the quad and δ_v unknown: the texel is
+    // hidden but not a tree sample for 𝕋 and 𝔼).
+    found: bool,
     id: u32,
     world: vec3<f32>,
     delta_v: f32,
@@ -41,6 +43,7 @@ fn measure_hit(in: ZOut, with_normal: bool) -> MeasureHit {
         return out;
     }
     out.ok = true;
+    out.found = hit.alpha_v >= 0.004;
     out.id = in.light_views.w;
     out.world = instance_to_world(hit.pv, in.base_scale, in.rot);
     out.delta_v = hit.delta_v;
@@ -54,10 +57,15 @@ fn measure_hit(in: ZOut, with_normal: bool) -> MeasureHit {
 
 // The tree's index in the tile: draws bind whole copies (each `frame.camera.z` trees) from a
 // copy boundary, so the instance index modulo the tile's trees is the same in every copy.
+// The mip is the ground texel's (frame.shadow_params.y metres) against the tree's texel, the
+// same in every direction and in `measure_eval`'s light rays.
 @vertex
 fn vs_measure_tree(in: ZIn, inst: TreeInstance, @builtin(instance_index) id: u32) -> ZOut {
     var out = z_vertex(in, inst, frame.sun_dir.xyz, true);
     out.light_views.w = id % u32(frame.camera.z);
+    let sp = z_species[out.views.w];
+    let texel_m = 2.0 * sp.centre_radius.w * inst.base_scale.w / f32(zp.tiles.x);
+    out.lod = max(log2(frame.shadow_params.y / texel_m), 0.0);
     return out;
 }
 
@@ -66,7 +74,8 @@ struct GBufferOut {
     @builtin(frag_depth) depth: f32,
 };
 
-// x: tree + 1; y: p_v's height (f32 bits); z: δ_v (16-bit unorm); w: the normal (8-bit snorm).
+// x: tree + 1; y: p_v's height (f32 bits); z: δ_v (16-bit unorm), or all ones where iteration 2
+// missed; w: the normal (8-bit snorm).
 @fragment
 fn fs_measure_gbuffer(in: ZOut) -> GBufferOut {
     let h = measure_hit(in, true);
@@ -74,7 +83,8 @@ fn fs_measure_gbuffer(in: ZOut) -> GBufferOut {
         discard;
     }
     var out: GBufferOut;
-    out.texel = vec4<u32>(h.id + 1u, bitcast<u32>(h.world.y), pack2x16unorm(vec2<f32>(h.delta_v, 0.0)), pack4x8snorm(vec4<f32>(h.normal, 0.0)));
+    let delta = select(0xffffffffu, pack2x16unorm(vec2<f32>(h.delta_v, 0.0)), h.found);
+    out.texel = vec4<u32>(h.id + 1u, bitcast<u32>(h.world.y), delta, pack4x8snorm(vec4<f32>(h.normal, 0.0)));
     out.depth = clamp(1.0 - h.world.y / frame.camera.y, 0.0, 1.0);
     return out;
 }
@@ -118,8 +128,9 @@ struct Eval {
 @group(2) @binding(2) var light_maps: texture_2d<u32>;
 // Two vec4 per tree of the tile (copy (0, 0)): base_scale, rot (as `GpuTreeInstance`).
 @group(2) @binding(3) var<storage, read> trees: array<vec4<f32>>;
-// xyz: towards the sun, per light direction.
-@group(2) @binding(4) var<storage, read> lights: array<vec4<f32>>;
+// xyz: towards the sun, per light direction (a uniform: the compute stage's storage buffers
+// stay within the downlevel four).
+@group(2) @binding(4) var<uniform> lights: array<vec4<f32>, 1024>;
 // Per (view, light) entry: Σ S′ (2¹² per unit), tree samples, ground texels seen and lit; per
 // view's sky entry: Σ δ·hole (2¹⁴ per unit), tree samples, ground texels seen.
 @group(2) @binding(5) var<storage, read_write> acc: array<atomic<u32>>;
@@ -163,7 +174,7 @@ fn measure_eval(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
         }
         // 𝕋 and 𝔼: the trees of every `stride`-th texel.
         let on_grid = all((gid.xy % vec2<u32>(stride)) == vec2<u32>(stride / 2u));
-        if (g.x != 0u && on_grid) {
+        if (g.x != 0u && g.z != 0xffffffffu && on_grid) {
             let id = g.x - 1u;
             var base_scale = trees[2u * id];
             var rot = trees[2u * id + 1u];

@@ -1,8 +1,7 @@
 //! BN12's shader-map (Bruneton & Neyret, *Real-time Realistic Rendering and Lighting of
-//! Forests*, 2012), the far end of the `auto` chain — **in progress**: this module holds what
-//! is built of it so far, §6's precomputed tables. It draws nothing yet: it is not in the
-//! registry (`render --technique shadermap` is an unknown technique), and only
-//! `sylvan bake --technique shadermap [--scene FILE]` measures its tables.
+//! Forests*, 2012), the far end of the `auto` chain — **in progress**: §6's precomputed tables
+//! and the field they shade the terrain with, drawn alone (`--technique shadermap`: the
+//! terrain carries the whole forest, no tree is drawn; it is not a band of `auto` yet).
 //! `docs/plans/shadermap.md` is the plan and says what comes next.
 //!
 //! **Built** ([`measure`], [`tables`], [`scene`]): the tables of §6 for a scene's species mix —
@@ -18,8 +17,15 @@
 //! texture (139,264 B at BN12's resolution), 𝔼 and 𝔻 in a 2D one (1,024 B); two fetches per
 //! lookup.
 //!
-//! **Not built yet**: ℂ, the field on the terrain (eq. 2–5, 13–21), coverage tiles, seeds on
-//! the GPU, the transitions of §7.
+//! **The field** ([`field`], `field.wgsl`): per terrain pixel eq. 2–5 (view and sun zeniths
+//! and their azimuth in the transformed space, the slope factor), then eq. 13
+//! `L = k_g Ī_g + (k_g + k_ḡ) J̄_g + (1 − k_g − k_ḡ)(𝕋 Ī_t + J̄_t)` with the ground's own albedo,
+//! sun (eq. 17) and sky × 𝔻 (eq. 19), and the trees' mean albedo ρ̄ with `zfield`'s sun scale and
+//! hotspot (eq. 20) and sky scale × 𝔼 (eq. 21).
+//!
+//! **Not built yet**: density maps (one density for the whole scene: its trees over its area),
+//! ℂ and coverage tiles, seeds on the GPU, `shadermap` as the last band of `auto` and the
+//! transitions of §7 (eq. 22–27).
 //!
 //! **Deviations from BN12**, each stated:
 //! - The patch is drawn unscaled and each table direction `v′` of the transformed space
@@ -51,11 +57,14 @@
 //!   (θv, θl, φ) puts the hotspot ridge on cell diagonals. On BN12's 16 zenith nodes the
 //!   interpolated 𝔾 then peaks exactly at θv = θl (0.25° sweeps, θl 20°–80°); on coarse tables
 //!   (5 nodes) the slope of Gd along θ̄ can still pull the peak off it.
+//! - The terrain's relief shadows (the cascades' V) multiply both the ground's and the trees'
+//!   sun (eq. 17, 20 assume flat open sky); the trees' shadows on the ground are in 𝔾.
 //! - One table set for the scene's species mix, h and A area-weighted over it (BN12 §10 allows
 //!   per-mix sets); the patch is a periodic Poisson tile with the scene's pattern radius, not
 //!   the terrain's own tiling, so the wrap-around is exact. Density nodes are the patch's
 //!   realised densities (n trees / area).
 
+pub mod field;
 pub mod gpu;
 pub mod measure;
 pub mod ridge;
@@ -155,3 +164,45 @@ impl ParamTable for ShaderMapBakeParams {
         Ok(())
     }
 }
+
+/// The registry entry: `shadermap` drawn alone (the terrain carries the forest; no tree is
+/// drawn). It is not a band of the `auto` chain yet.
+pub const ENTRY: super::registry::Entry = super::registry::Entry {
+    name: "shadermap",
+    kind: super::registry::Kind::Field,
+    summary: "BN12 §6 shader-map: the forest as a field on the terrain, from tables measured on z-field patches (drawn alone; no trees)",
+    debug_color: [0.55, 0.35, 0.85],
+    gpu_driven: true,
+    schema: super::params::schema::<ShaderMapBakeParams, super::params::NoParams>,
+    check: scene::check_settings,
+    build: |cx| {
+        let (tables, report) = bake_scene(
+            cx.gpu,
+            cx.scene,
+            cx.plants,
+            cx.settings,
+            cx.policy,
+            cx.policy,
+            &mut *cx.progress,
+        )?;
+        let (_, draw) = super::params::resolve::<
+            super::zfield::ZFieldBakeParams,
+            super::zfield::ZFieldDrawParams,
+        >("zfield", &cx.settings_for("zfield"))?;
+        let [x, z] = cx.scene.terrain.size;
+        let density = (cx.scene.estimated_trees() / (x as f64 * z as f64).max(1.0)) as f32;
+        let field = field::ForestField::new(cx.gpu, &tables, density, &draw)?;
+        Ok(super::Built {
+            technique: Box::new(field::ShaderMap { field }),
+            reports: vec![report],
+        })
+    },
+    bake: None,
+    shaders: || {
+        vec![
+            ("shadermap_terrain", field::terrain_source()),
+            ("shadermap_measure", measure::shader_source()),
+            ("shadermap_probe", gpu::probe_source()),
+        ]
+    },
+};

@@ -94,7 +94,8 @@ impl RidgeTables {
         }
     }
 
-    /// (𝔾, 𝕋) at transformed zeniths `tv`, `tl`, azimuth `phi` (radians) and density `lambda`
+    /// (𝔾, 𝕋) at transformed zeniths `tv`, `tl`, azimuth `phi` (radians, in [0, π]: |φ| is
+    /// clamped to π, not folded) and density `lambda`
     /// (trees per m²): multilinear in (φ, δ node index, θ̄) within the two density slabs
     /// around `lambda`, linear between them — what the GPU's trilinear fetches give.
     pub fn sample(&self, tv: f32, tl: f32, phi: f32, lambda: f32) -> [f32; 2] {

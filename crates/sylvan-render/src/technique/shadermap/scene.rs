@@ -101,12 +101,17 @@ pub fn scene_mix(scene: &Scene) -> Result<SceneMix, RenderError> {
 
 /// The tables for `scene` (plants: one per species): the `zfield` bakes of its species (read
 /// or baked, `zfield.*` settings apply), then the tables (`shadermap.*` settings).
+///
+/// `settings` are the scene's own `[technique.*]` tables then the command line's; the `zfield`
+/// bakes go through `zfield_policy` (the cache), the tables through `tables_policy` (the
+/// cache, or the file `sylvan bake --out` names).
 pub fn bake_scene(
     gpu: &sylvan_gpu::Gpu,
     scene: &Scene,
     plants: &[Plant],
     settings: &[Setting],
-    policy: &CachePolicy,
+    zfield_policy: &CachePolicy,
+    tables_policy: &CachePolicy,
     progress: &mut dyn FnMut(&str, usize, usize),
 ) -> Result<(ShaderMapTables, BakeReport), RenderError> {
     let of =
@@ -119,7 +124,7 @@ pub fn bake_scene(
         let plant = plants
             .get(s.species)
             .ok_or_else(|| RenderError::Plant(format!("species {} has no plant", s.species)))?;
-        let (z, _) = load_or_bake::<ZFieldBake>(gpu, plant, &zbake, policy, &mut |d, t| {
+        let (z, _) = load_or_bake::<ZFieldBake>(gpu, plant, &zbake, zfield_policy, &mut |d, t| {
             progress(&plant.name, d, t)
         })?;
         zfields.push(z);
@@ -141,7 +146,7 @@ pub fn bake_scene(
         radius_m: mix.radius_m,
         lambda_max: mix.lambda_max,
     };
-    load_or_measure(gpu, &forest, &params, policy, &mut |d, t| {
+    load_or_measure(gpu, &forest, &params, tables_policy, &mut |d, t| {
         progress("shadermap tables", d, t)
     })
 }
@@ -155,8 +160,7 @@ pub fn params(settings: &[Setting]) -> Result<ShaderMapBakeParams, RenderError> 
     resolve::<ShaderMapBakeParams, NoParams>("shadermap", &mine).map(|(b, _)| b)
 }
 
-/// Checks `shadermap.*` settings without a GPU (the tables are not a registered technique
-/// yet, so the registry's check defers to this).
+/// Checks `shadermap.*` settings without a GPU.
 pub fn check_settings(settings: &[&Setting]) -> Result<(), RenderError> {
     resolve::<ShaderMapBakeParams, NoParams>("shadermap", settings).map(|_| ())
 }

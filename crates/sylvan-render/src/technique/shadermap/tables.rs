@@ -25,6 +25,9 @@ pub struct ShaderMapTables {
     pub crown_area_m2: f32,
     /// Ground texels per measured entry.
     pub samples: u32,
+    /// ρ̄: the mix's mean tree albedo (linear RGB), the α-weighted mean of its `zfield` views'
+    /// albedo, species weighted by share × crown area (eq. 20–21).
+    pub tree_albedo: [f32; 3],
     /// `g[((l · theta + v) · theta + t) · phi + m]`: 𝔾(θv, θl, φ, λ), the fraction of ground
     /// seen from the view direction that the sun also reaches (eq. 14).
     pub g: Vec<f32>,
@@ -142,6 +145,9 @@ impl ShaderMapTables {
             ));
         }
         let unit = |v: &f32| (0.0..=1.0).contains(v);
+        if !self.tree_albedo.iter().all(unit) {
+            return Err(format!("tree albedo {:?} outside [0, 1]", self.tree_albedo));
+        }
         if !self.g.iter().all(unit) || !self.gd.iter().all(unit) || !self.d.iter().all(unit) {
             return Err("a visibility fraction outside [0, 1]".into());
         }
@@ -176,6 +182,7 @@ impl Codec for ShaderMapTables {
         e.f32(self.h);
         e.f32(self.crown_area_m2);
         e.u32(self.samples);
+        e.f32s(&self.tree_albedo);
         e.f32s(&self.g);
         e.f32s(&self.gd);
         e.f32s(&self.d);
@@ -193,6 +200,11 @@ impl Codec for ShaderMapTables {
             h: d.f32()?,
             crown_area_m2: d.f32()?,
             samples: d.u32()?,
+            tree_albedo: {
+                let a = d.f32s()?;
+                a.try_into()
+                    .map_err(|_| DecodeError("tree albedo is not 3 values".into()))?
+            },
             g: d.f32s()?,
             gd: d.f32s()?,
             d: d.f32s()?,
