@@ -555,7 +555,10 @@ fn bake_measures_and_caches_shadermap_tables_for_a_scene() {
     scene_args[4] = own.to_str().unwrap();
     let from_scene = json_of(&sylvan(&scene_args, &dir));
     assert_eq!(from_scene["from_cache"], false, "{from_scene}");
-    assert_eq!(from_scene["tables"]["theta"], 4, "--set shadermap.theta=4 wins");
+    assert_eq!(
+        from_scene["tables"]["theta"], 4,
+        "--set shadermap.theta=4 wins"
+    );
     // A bad table key and a plant where a scene is wanted are one-line errors.
     let out = sylvan(
         &[
