@@ -105,3 +105,61 @@ fn the_field_peaks_at_backscatter_and_is_darker_facing_the_sun() {
         "60° with the sun behind: luma {behind}; facing it: {facing}"
     );
 }
+
+#[test]
+fn without_trees_the_field_is_the_plain_terrain() {
+    let gpu = gpu();
+    // The stand's trees stay where they are (the tables are measured for them), the camera
+    // looks at a corner of the terrain from which none is in view, shadows off: `geometry`
+    // draws only the terrain there, and the field at density 0 must equal it.
+    let mut scene = stand();
+    scene
+        .trees
+        .retain(|t| t.position.x > 450.0 && t.position.z > 450.0);
+    scene.camera = Camera {
+        position: Vec3::new(300.0, 30.0, 300.0),
+        look_at: Vec3::new(150.0, 0.0, 170.0),
+        fov_deg: 50.0,
+    };
+    let base = RenderOptions {
+        width: 48,
+        height: 48,
+        shadows: false,
+        cache: CachePolicy::Off,
+        ..Default::default()
+    };
+    let plants = vec![common::test_tree()];
+    let mut field_settings = settings();
+    field_settings.push(Setting::from_arg("shadermap.density_scale=0").unwrap());
+    let frame = |options: RenderOptions| {
+        let mut r = Renderer::new(&gpu, &scene, &plants, &options).expect("renderer");
+        let stats = r.render(&gpu, &scene.camera, &scene.sun).expect("frame");
+        let img =
+            image::DynamicImage::ImageRgba8(r.read_image(&gpu).expect("readback")).into_rgb8();
+        (img, stats)
+    };
+    let (field, _) = frame(RenderOptions {
+        technique: "shadermap".into(),
+        settings: field_settings,
+        ..base.clone()
+    });
+    let (plain, stats) = frame(RenderOptions {
+        technique: "geometry".into(),
+        ..base
+    });
+    assert_eq!(
+        stats.trees_drawn.values().sum::<u32>(),
+        0,
+        "no tree in view"
+    );
+    let worst = field
+        .pixels()
+        .zip(plain.pixels())
+        .flat_map(|(a, b)| (0..3).map(move |c| (a[c] as i32 - b[c] as i32).abs()))
+        .max()
+        .unwrap();
+    assert!(
+        worst <= 1,
+        "the bare field differs from the terrain by {worst}/255"
+    );
+}

@@ -108,6 +108,38 @@ impl Default for ShaderMapBakeParams {
     }
 }
 
+/// Draw parameters of `shadermap` (never re-measure).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ShaderMapDrawParams {
+    /// Scale of the field's tree density (the scene's trees over its area): 0 is bare terrain.
+    pub density_scale: f32,
+}
+
+impl Default for ShaderMapDrawParams {
+    fn default() -> Self {
+        Self { density_scale: 1.0 }
+    }
+}
+
+impl ParamTable for ShaderMapDrawParams {
+    const DOCS: &'static [ParamDoc] = &[ParamDoc {
+        key: "density_scale",
+        unit: "×",
+        doc: "scale of the field's tree density (the scene's trees over its area); 0 draws bare terrain (0–100)",
+    }];
+
+    fn validate(&self) -> Result<(), String> {
+        if !(0.0..=100.0).contains(&self.density_scale) {
+            return Err(format!(
+                "shadermap density_scale {}: must be 0 to 100",
+                self.density_scale
+            ));
+        }
+        Ok(())
+    }
+}
+
 impl ParamTable for ShaderMapBakeParams {
     const DOCS: &'static [ParamDoc] = &[
         ParamDoc {
@@ -173,7 +205,7 @@ pub const ENTRY: super::registry::Entry = super::registry::Entry {
     summary: "BN12 §6 shader-map: the forest as a field on the terrain, from tables measured on z-field patches (drawn alone; no trees)",
     debug_color: [0.55, 0.35, 0.85],
     gpu_driven: true,
-    schema: super::params::schema::<ShaderMapBakeParams, super::params::NoParams>,
+    schema: super::params::schema::<ShaderMapBakeParams, ShaderMapDrawParams>,
     check: scene::check_settings,
     build: |cx| {
         let (tables, report) = bake_scene(
@@ -189,8 +221,13 @@ pub const ENTRY: super::registry::Entry = super::registry::Entry {
             super::zfield::ZFieldBakeParams,
             super::zfield::ZFieldDrawParams,
         >("zfield", &cx.settings_for("zfield"))?;
+        let (_, own) = super::params::resolve::<ShaderMapBakeParams, ShaderMapDrawParams>(
+            "shadermap",
+            &cx.settings_for("shadermap"),
+        )?;
         let [x, z] = cx.scene.terrain.size;
-        let density = (cx.scene.estimated_trees() / (x as f64 * z as f64).max(1.0)) as f32;
+        let density = (cx.scene.estimated_trees() / (x as f64 * z as f64).max(1.0)) as f32
+            * own.density_scale;
         let field = field::ForestField::new(cx.gpu, &tables, density, &draw)?;
         Ok(super::Built {
             technique: Box::new(field::ShaderMap { field }),

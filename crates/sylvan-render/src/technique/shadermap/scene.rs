@@ -2,10 +2,10 @@
 //! and peak density, and the tables baked for it (`sylvan bake --technique shadermap`).
 
 use super::measure::{ForestMix, MixSpecies, load_or_measure};
-use super::{ShaderMapBakeParams, ShaderMapTables};
+use super::{ShaderMapBakeParams, ShaderMapDrawParams, ShaderMapTables};
 use crate::RenderError;
 use crate::bake::{BakeReport, CachePolicy, load_or_bake};
-use crate::technique::params::{NoParams, resolve};
+use crate::technique::params::resolve;
 use crate::technique::zfield::{ZFieldBake, ZFieldBakeParams, ZFieldDrawParams};
 use sylvan_plant::Plant;
 use sylvan_scene::{Scene, Setting};
@@ -157,10 +157,10 @@ pub fn params(settings: &[Setting]) -> Result<ShaderMapBakeParams, RenderError> 
         .iter()
         .filter(|s| s.technique == "shadermap")
         .collect();
-    resolve::<ShaderMapBakeParams, NoParams>("shadermap", &mine).map(|(b, _)| b)
+    resolve::<ShaderMapBakeParams, ShaderMapDrawParams>("shadermap", &mine).map(|(b, _)| b)
 }
 
 /// Checks `shadermap.*` settings without a GPU.
 pub fn check_settings(settings: &[&Setting]) -> Result<(), RenderError> {
-    resolve::<ShaderMapBakeParams, NoParams>("shadermap", settings).map(|_| ())
+    resolve::<ShaderMapBakeParams, ShaderMapDrawParams>("shadermap", settings).map(|_| ())
 }
