@@ -761,6 +761,39 @@ impl Renderer {
         Ok(sylvan_gpu::read_rgba8(gpu, &t.output.color)?)
     }
 
+    /// The mean linear radiance (RGB, before exposure and tone mapping) of the last frame over
+    /// the output-pixel rectangle `[x, y, w, h]`, read from the HDR target (all its supersamples
+    /// inside the rectangle).
+    pub fn radiance_mean(&self, gpu: &Gpu, rect: [u32; 4]) -> Result<[f32; 3], RenderError> {
+        let Some(t) = &self.targets else {
+            return Err(RenderError::Option(
+                "this renderer draws into a caller's target: measure the caller's attachment"
+                    .into(),
+            ));
+        };
+        let [x, y, w, h] = rect;
+        let (width, height) = (self.options.width, self.options.height);
+        if w == 0 || h == 0 || x.saturating_add(w) > width || y.saturating_add(h) > height {
+            return Err(RenderError::Option(format!(
+                "--measure {x},{y},{w},{h}: the rectangle must be non-empty and inside the {width}x{height} image"
+            )));
+        }
+        let bytes = sylvan_gpu::read_texture_bytes(gpu, &t.hdr.color)?;
+        let halves: &[u16] = bytemuck::cast_slice(&bytes);
+        let (f, row) = (t.factor as usize, (width * t.factor) as usize);
+        let mut sum = [0.0f64; 3];
+        for py in y as usize * f..(y + h) as usize * f {
+            for px in x as usize * f..(x + w) as usize * f {
+                let at = (py * row + px) * 4;
+                for (c, v) in sum.iter_mut().enumerate() {
+                    *v += crate::bake::f16_to_f32(halves[at + c]) as f64;
+                }
+            }
+        }
+        let n = (w as usize * f * h as usize * f) as f64;
+        Ok(sum.map(|v| (v / n) as f32))
+    }
+
     fn frame_uniforms(
         &self,
         fv: &FrameView,

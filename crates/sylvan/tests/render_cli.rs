@@ -577,3 +577,45 @@ fn bake_measures_and_caches_shadermap_tables_for_a_scene() {
     );
     assert_one_line_error(&out, &["--scene"]);
 }
+
+#[test]
+fn render_measures_linear_radiance_over_a_rectangle() {
+    let dir = workdir("measure");
+    let scene = tiny_scene(&dir);
+    let stats = dir.join("s.json");
+    let run = |rect: &str| {
+        sylvan(
+            &[
+                "render",
+                scene.to_str().unwrap(),
+                "--size",
+                "32x18",
+                "--out",
+                dir.join("m.png").to_str().unwrap(),
+                "--stats",
+                stats.to_str().unwrap(),
+                "--measure",
+                rect,
+            ],
+            &dir,
+        )
+    };
+    let out = run("0,0,32,18");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let all: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let mean = all["radiance_mean"].as_array().unwrap();
+    assert_eq!(mean.len(), 3);
+    assert!(mean.iter().all(|v| v.as_f64().unwrap() > 0.0), "{mean:?}");
+    // The top rows are sky, brighter than the whole frame's mean in blue.
+    assert!(run("0,0,32,2").status.success());
+    let sky: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    assert!(sky["radiance_mean"][2].as_f64().unwrap() > mean[2].as_f64().unwrap());
+    assert_one_line_error(&run("20,0,20,4"), &["inside the 32x18 image"]);
+    assert_one_line_error(&run("1,2,3"), &["X,Y,W,H"]);
+}

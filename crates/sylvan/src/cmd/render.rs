@@ -24,6 +24,21 @@ pub struct RenderArgs {
     /// `a-000.png`, `a-001.png`, ….
     #[arg(long, default_value_t = 1)]
     pub frames: usize,
+    /// Add the last frame's mean linear radiance (RGB, before exposure and tone mapping) over
+    /// this rectangle of output pixels to the stats (`radiance_mean`; needs --stats).
+    #[arg(long, value_name = "X,Y,W,H", value_parser = parse_rect)]
+    pub measure: Option<[u32; 4]>,
+}
+
+fn parse_rect(s: &str) -> Result<[u32; 4], String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let values: Option<Vec<u32>> = parts.iter().map(|p| p.parse().ok()).collect();
+    match values {
+        Some(v) if v.len() == 4 => Ok([v[0], v[1], v[2], v[3]]),
+        _ => Err(format!(
+            "'{s}' is not a rectangle — give X,Y,W,H in output pixels, e.g. 100,50,40,30"
+        )),
+    }
 }
 
 /// Most frames `render --path` writes.
@@ -73,6 +88,9 @@ fn check_out(flag: &str, out: &Path) -> Result<()> {
 /// Runs `sylvan render`.
 pub fn run(args: RenderArgs) -> Result<()> {
     check_out("--out", &args.out)?;
+    if args.measure.is_some() && args.stats.is_none() {
+        anyhow::bail!("--measure adds to the stats — pass --stats FILE.json too");
+    }
     if let Some(stats) = &args.stats {
         check_out("--stats", stats)?;
     }
@@ -110,7 +128,11 @@ pub fn run(args: RenderArgs) -> Result<()> {
         stats = Some(s);
     }
     let stats = stats.expect("at least one frame");
-    let report = Report::new(
+    let radiance = match args.measure {
+        Some(rect) => Some(renderer.radiance_mean(&gpu, rect)?),
+        None => None,
+    };
+    let mut report = Report::new(
         &r.options.technique,
         [r.options.width, r.options.height],
         r.options.spp,
@@ -118,6 +140,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         bake_ms,
         gpu.adapter_label(),
     );
+    report.radiance_mean = radiance;
     if let Some(path) = &args.stats {
         std::fs::write(path, serde_json::to_string_pretty(&report)? + "\n").with_context(|| {
             format!(

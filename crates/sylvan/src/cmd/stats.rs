@@ -62,6 +62,10 @@ pub struct Report {
     #[serde(flatten)]
     pub techniques: BTreeMap<String, BTreeMap<String, serde_json::Value>>,
     pub adapter: String,
+    /// `render --measure X,Y,W,H`: the last frame's mean linear radiance (RGB, before exposure
+    /// and tone mapping) over that rectangle of output pixels.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub radiance_mean: Option<[f32; 3]>,
     /// The camera path replayed (`bench --path`), as given.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub path: Option<String>,
@@ -146,6 +150,7 @@ impl Report {
                 })
                 .collect(),
             adapter,
+            radiance_mean: None,
             path: None,
             per_frame: None,
         }
