@@ -28,6 +28,20 @@ pub fn storage(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupL
     }
 }
 
+/// A read-write storage buffer at `binding`.
+pub fn storage_rw(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: false },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
 /// A filterable `texture_2d_array` at `binding`, read in the fragment stage (image atlases).
 pub fn atlas(binding: u32) -> wgpu::BindGroupLayoutEntry {
     texture(

@@ -48,6 +48,15 @@ pub(crate) fn trilinear_sampler(gpu: &Gpu, label: &str) -> wgpu::Sampler {
     })
 }
 
+/// An sRGB-encoded value in [0, 1] to linear.
+pub(crate) fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
 /// A bind group binding `resources` to slots 0, 1, 2, … of `layout`.
 pub(crate) fn bind_group(
     gpu: &Gpu,

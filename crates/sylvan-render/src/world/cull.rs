@@ -293,16 +293,7 @@ impl Cull {
         let device = &gpu.device;
         use sylvan_gpu::layout;
         let c = wgpu::ShaderStages::COMPUTE;
-        let rw = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: c,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: false },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
+        let rw = |binding| layout::storage_rw(binding, c);
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("cull_layout"),
             entries: &[

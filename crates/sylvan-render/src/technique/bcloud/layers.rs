@@ -387,14 +387,6 @@ fn sample(tex: &LeafTexture, uv: Vec2) -> [f32; 4] {
     })
 }
 
-fn srgb_to_linear(c: f32) -> f32 {
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
-
 /// What one plane point shows from one side: the first opaque leaf of its cell's list.
 pub struct Hit {
     /// Record number.
@@ -646,7 +638,7 @@ fn shade(
         ((rec.color >> 8) & 255) as f32 / 255.0,
         ((rec.color >> 16) & 255) as f32 / 255.0,
     ];
-    let albedo = [0, 1, 2].map(|k| srgb_to_linear(tex[k]) * col[k]);
+    let albedo = [0, 1, 2].map(|k| crate::technique::common::srgb_to_linear(tex[k]) * col[k]);
     let (lo, hi) = (unpack_unorm2(rec.uv_box[0]), unpack_unorm2(rec.uv_box[1]));
     let q = ((uv - lo) / (hi - lo).max(Vec2::splat(1e-6))).clamp(Vec2::ZERO, Vec2::ONE);
     let a = [0, 8, 16, 24].map(|s| ((rec.ao >> s) & 255) as f32 / 255.0);

@@ -39,17 +39,15 @@ impl ForestField {
     ) -> Result<Self, RenderError> {
         let t = GpuTables::upload(gpu, tables)?;
         let device = &gpu.device;
-        let all = wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE;
-        let f3 = wgpu::TextureSampleType::Float { filterable: true };
+        // Binding 0 the field, 1–4 the tables.
+        let mut entries = vec![sylvan_gpu::layout::uniform(
+            0,
+            wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE,
+        )];
+        entries.extend(GpuTables::entries(1));
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("shadermap_field"),
-            entries: &[
-                sylvan_gpu::layout::uniform(0, all),
-                sylvan_gpu::layout::uniform(1, all),
-                sylvan_gpu::layout::texture(2, all, f3, wgpu::TextureViewDimension::D3),
-                sylvan_gpu::layout::texture(3, all, f3, wgpu::TextureViewDimension::D2),
-                sylvan_gpu::layout::sampler(4, all, wgpu::SamplerBindingType::Filtering),
-            ],
+            entries: &entries,
         });
         let [r, g, b] = tables.tree_albedo;
         let params = GpuFieldParams {
@@ -62,32 +60,10 @@ impl ForestField {
             contents: bytemuck::bytes_of(&params),
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("shadermap_field"),
-            layout: &layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: buffer.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: t.info.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: wgpu::BindingResource::TextureView(&t.gt),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: wgpu::BindingResource::TextureView(&t.dec),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 4,
-                    resource: wgpu::BindingResource::Sampler(&t.sampler),
-                },
-            ],
-        });
+        let mut resources = vec![buffer.as_entire_binding()];
+        resources.extend(t.resources());
+        let bind =
+            crate::technique::common::bind_group(gpu, "shadermap_field", &layout, &resources);
         Ok(Self {
             layout,
             bind,

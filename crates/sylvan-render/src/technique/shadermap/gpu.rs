@@ -7,6 +7,7 @@
 use super::ridge::RidgeTables;
 use super::tables::ShaderMapTables;
 use crate::RenderError;
+use crate::technique::common;
 use bytemuck::{Pod, Zeroable};
 use sylvan_gpu::Gpu;
 use wgpu::util::DeviceExt;
@@ -159,12 +160,7 @@ impl GpuTables {
             contents: bytemuck::bytes_of(&info),
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("shadermap_tables"),
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            ..Default::default()
-        });
+        let sampler = common::trilinear_sampler(gpu, "shadermap_tables");
         Ok(Self {
             bytes: (gt_bits.len() * 2 + dec_bits.len() * 2) as u64 + info.size(),
             gt: gt.create_view(&Default::default()),
@@ -191,76 +187,43 @@ pub(crate) fn probe_source() -> String {
 }
 
 impl GpuTables {
-    /// The bind group layout of the tables (bindings 0–3, visible to every stage).
-    pub fn layout(gpu: &Gpu) -> wgpu::BindGroupLayout {
+    /// The tables' layout entries at bindings `first..first + 4` (uniform, 3D and 2D
+    /// textures, sampler; visible to every stage), as `tables_wgsl(_, first)` declares them.
+    pub fn entries(first: u32) -> [wgpu::BindGroupLayoutEntry; 4] {
         let all = wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE;
-        gpu.device
-            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("shadermap_tables"),
-                entries: &[
-                    sylvan_gpu::layout::uniform(0, all),
-                    sylvan_gpu::layout::texture(
-                        1,
-                        all,
-                        wgpu::TextureSampleType::Float { filterable: true },
-                        wgpu::TextureViewDimension::D3,
-                    ),
-                    sylvan_gpu::layout::texture(
-                        2,
-                        all,
-                        wgpu::TextureSampleType::Float { filterable: true },
-                        wgpu::TextureViewDimension::D2,
-                    ),
-                    sylvan_gpu::layout::sampler(3, all, wgpu::SamplerBindingType::Filtering),
-                ],
-            })
+        let f = wgpu::TextureSampleType::Float { filterable: true };
+        [
+            sylvan_gpu::layout::uniform(first, all),
+            sylvan_gpu::layout::texture(first + 1, all, f, wgpu::TextureViewDimension::D3),
+            sylvan_gpu::layout::texture(first + 2, all, f, wgpu::TextureViewDimension::D2),
+            sylvan_gpu::layout::sampler(first + 3, all, wgpu::SamplerBindingType::Filtering),
+        ]
     }
 
-    /// A bind group of the tables for [`GpuTables::layout`].
-    pub fn bind(&self, gpu: &Gpu, layout: &wgpu::BindGroupLayout) -> wgpu::BindGroup {
-        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("shadermap_tables"),
-            layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: self.info.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(&self.gt),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: wgpu::BindingResource::TextureView(&self.dec),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: wgpu::BindingResource::Sampler(&self.sampler),
-                },
-            ],
-        })
+    /// What [`GpuTables::entries`] binds, in order.
+    pub fn resources(&self) -> [wgpu::BindingResource<'_>; 4] {
+        [
+            self.info.as_entire_binding(),
+            wgpu::BindingResource::TextureView(&self.gt),
+            wgpu::BindingResource::TextureView(&self.dec),
+            wgpu::BindingResource::Sampler(&self.sampler),
+        ]
     }
 
     /// The shader's lookups at `points` (θv, θl, φ in radians of the transformed space, λ in
     /// trees per m²): (𝔾, 𝕋, 𝔼, 𝔻) each, evaluated on the GPU by `probe.wgsl`.
     pub fn probe(&self, gpu: &Gpu, points: &[[f32; 4]]) -> Result<Vec<[f32; 4]>, RenderError> {
         let device = &gpu.device;
-        let layout = Self::layout(gpu);
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("shadermap_tables"),
+            entries: &Self::entries(0),
+        });
+        let cs = wgpu::ShaderStages::COMPUTE;
         let io_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("shadermap_probe_io"),
             entries: &[
-                sylvan_gpu::layout::storage(0, wgpu::ShaderStages::COMPUTE),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: false },
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
+                sylvan_gpu::layout::storage(0, cs),
+                sylvan_gpu::layout::storage_rw(1, cs),
             ],
         });
         let module = sylvan_gpu::shader(gpu, "shadermap_probe", &probe_source());
@@ -291,21 +254,13 @@ impl GpuTables {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
-        let io = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("shadermap_probe_io"),
-            layout: &io_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: inb.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: outb.as_entire_binding(),
-                },
-            ],
-        });
-        let tables = self.bind(gpu, &layout);
+        let io = common::bind_group(
+            gpu,
+            "shadermap_probe_io",
+            &io_layout,
+            &[inb.as_entire_binding(), outb.as_entire_binding()],
+        );
+        let tables = common::bind_group(gpu, "shadermap_tables", &layout, &self.resources());
         let mut encoder = device.create_command_encoder(&Default::default());
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());

@@ -22,6 +22,7 @@ use crate::bake::{BakeReport, CachePolicy, cache};
 use crate::directions::HemiGrid;
 use crate::frame::GpuFrame;
 use crate::instances::GpuTreeInstance;
+use crate::technique::common;
 use crate::technique::zfield::{
     ZFieldBake, ZFieldBakeParams, ZFieldBaked, ZFieldBindings, ZFieldDrawParams,
 };
@@ -112,16 +113,6 @@ fn crown(s: &MixSpecies<'_>) -> Result<Crown, RenderError> {
     })
 }
 
-/// sRGB byte to linear.
-fn srgb_to_linear(b: u8) -> f64 {
-    let s = b as f64 / 255.0;
-    if s <= 0.04045 {
-        s / 12.92
-    } else {
-        ((s + 0.055) / 1.055).powf(2.4)
-    }
-}
-
 /// A species' mean albedo (linear RGB): its views' premultiplied sRGB albedo decoded and
 /// divided by their coverage, over every view.
 fn mean_albedo(z: &ZFieldBaked) -> [f64; 3] {
@@ -130,7 +121,7 @@ fn mean_albedo(z: &ZFieldBaked) -> [f64; 3] {
         if let Some(level) = v.levels.first() {
             for p in level.color.chunks_exact(4) {
                 for c in 0..3 {
-                    sum[c] += srgb_to_linear(p[c]);
+                    sum[c] += crate::technique::common::srgb_to_linear(p[c] as f32 / 255.0) as f64;
                 }
                 alpha += p[3] as f64 / 255.0;
             }
@@ -455,8 +446,8 @@ struct GpuEval {
 
 /// An atlas of `cols × rows` square tiles of `px` texels, and its depth buffer.
 struct Atlas {
-    view: wgpu::TextureView,
-    depth: Option<wgpu::TextureView>,
+    /// Colour and depth of the whole atlas (`sylvan_gpu`'s target).
+    target: sylvan_gpu::RenderTarget,
     cols: u32,
     rows: u32,
 }
@@ -468,47 +459,16 @@ impl Atlas {
         format: wgpu::TextureFormat,
         px: u32,
         tiles: u32,
-        depth: bool,
-    ) -> Self {
+    ) -> Result<Self, RenderError> {
         let max = gpu.device.limits().max_texture_dimension_2d;
         let fit = (max / px).clamp(1, 8);
         let cols = fit.min(tiles.max(1));
         let rows = tiles.max(1).div_ceil(cols).min(fit);
-        let size = wgpu::Extent3d {
-            width: cols * px,
-            height: rows * px,
-            depth_or_array_layers: 1,
-        };
-        let make = |format, usage| {
-            gpu.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size,
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage,
-                view_formats: &[],
-            })
-        };
-        let texture = make(
-            format,
-            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-        );
-        let view = texture.create_view(&Default::default());
-        let depth = depth.then(|| {
-            make(
-                sylvan_gpu::DEPTH_FORMAT,
-                wgpu::TextureUsages::RENDER_ATTACHMENT,
-            )
-            .create_view(&Default::default())
-        });
-        Self {
-            view,
-            depth,
+        Ok(Self {
+            target: sylvan_gpu::RenderTarget::new(gpu, label, cols * px, rows * px, format)?,
             cols,
             rows,
-        }
+        })
     }
 
     fn tiles(&self) -> usize {
@@ -589,16 +549,7 @@ impl Measurer {
                 layout::texture(2, cs, uint, d2),
                 layout::storage(3, cs),
                 layout::uniform(4, cs),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 5,
-                    visibility: cs,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: false },
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
+                layout::storage_rw(5, cs),
             ],
         });
         let empty_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -683,8 +634,7 @@ impl Measurer {
             wgpu::TextureFormat::Rgba32Uint,
             px,
             views as u32,
-            true,
-        );
+        )?;
         if views_atlas.tiles() < views {
             return Err(RenderError::Option(format!(
                 "shadermap: {views} view G-buffers of {px}² do not fit the device's textures — lower patch_px or theta"
@@ -696,8 +646,7 @@ impl Measurer {
             wgpu::TextureFormat::Rg32Uint,
             px,
             dirs.min(ATLAS_TILES),
-            true,
-        );
+        )?;
         Ok(Self {
             gbuffer,
             light,
@@ -796,18 +745,16 @@ impl Measurer {
         });
         let binds = (0..dirs.len())
             .map(|i| {
-                device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("shadermap_measure_frame"),
-                    layout: &self.frame_layout,
-                    entries: &[wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                            buffer: &buffer,
-                            offset: i as u64 * stride,
-                            size: wgpu::BufferSize::new(size),
-                        }),
-                    }],
-                })
+                common::bind_group(
+                    gpu,
+                    "shadermap_measure_frame",
+                    &self.frame_layout,
+                    &[wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: &buffer,
+                        offset: i as u64 * stride,
+                        size: wgpu::BufferSize::new(size),
+                    })],
+                )
             })
             .collect();
         (buffer, binds)
@@ -829,7 +776,7 @@ impl Measurer {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("shadermap_measure"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &atlas.view,
+                view: &atlas.target.color_view,
                 depth_slice: None,
                 resolve_target: None,
                 ops: wgpu::Operations {
@@ -837,15 +784,13 @@ impl Measurer {
                     store: wgpu::StoreOp::Store,
                 },
             })],
-            depth_stencil_attachment: atlas.depth.as_ref().map(|view| {
-                wgpu::RenderPassDepthStencilAttachment {
-                    view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Discard,
-                    }),
-                    stencil_ops: None,
-                }
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &atlas.target.depth_view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Discard,
+                }),
+                stencil_ops: None,
             }),
             timestamp_writes: None,
             occlusion_query_set: None,
@@ -943,40 +888,23 @@ impl Measurer {
         });
         let binds: Vec<wgpu::BindGroup> = (0..nv * batches)
             .map(|i| {
-                device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("shadermap_measure_eval"),
-                    layout: &self.eval_layout,
-                    entries: &[
-                        wgpu::BindGroupEntry {
-                            binding: 0,
-                            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                                buffer: &evals,
-                                offset: i as u64 * stride,
-                                size: wgpu::BufferSize::new(size),
-                            }),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 1,
-                            resource: wgpu::BindingResource::TextureView(&self.views.view),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 2,
-                            resource: wgpu::BindingResource::TextureView(&self.lights.view),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 3,
-                            resource: drawn.tile.as_entire_binding(),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 4,
-                            resource: light_buffer.as_entire_binding(),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 5,
-                            resource: acc.as_entire_binding(),
-                        },
+                common::bind_group(
+                    gpu,
+                    "shadermap_measure_eval",
+                    &self.eval_layout,
+                    &[
+                        wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                            buffer: &evals,
+                            offset: i as u64 * stride,
+                            size: wgpu::BufferSize::new(size),
+                        }),
+                        wgpu::BindingResource::TextureView(&self.views.target.color_view),
+                        wgpu::BindingResource::TextureView(&self.lights.target.color_view),
+                        drawn.tile.as_entire_binding(),
+                        light_buffer.as_entire_binding(),
+                        acc.as_entire_binding(),
                     ],
-                })
+                )
             })
             .collect();
         let (_vbuf, vbinds) = self.frames(gpu, p, drawn.n, views);
