@@ -375,6 +375,7 @@ impl Renderer {
             plants,
             population: &instances,
             band: BandRange::ALL,
+            field: None,
             settings: &settings,
             overrides: &options.settings,
             policy: &options.cache,

@@ -163,3 +163,133 @@ fn without_trees_the_field_is_the_plain_terrain() {
         "the bare field differs from the terrain by {worst}/255"
     );
 }
+
+/// The mean linear radiance over the central half of a 64² frame of the stand (or of
+/// `trees`) drawn by the chain `zfield` to `s_max`, the field beyond, from `camera`, with
+/// `extra` settings. Bakes are shared through `cache`.
+fn chain_radiance(
+    s_max: f32,
+    trees: Option<&[TreeInstance]>,
+    camera: &Camera,
+    extra: &[&str],
+    shadows: bool,
+    cache: &std::path::Path,
+) -> [f32; 3] {
+    let gpu = gpu();
+    let mut scene = stand();
+    if let Some(t) = trees {
+        scene.trees = t.to_vec();
+    }
+    scene.lod_chain = vec![format!("zfield:0-{s_max}"), format!("shadermap:{s_max}-")];
+    let mut settings = settings();
+    settings.extend(extra.iter().map(|a| Setting::from_arg(a).unwrap()));
+    let options = RenderOptions {
+        width: 64,
+        height: 64,
+        technique: "auto".into(),
+        settings,
+        shadows,
+        cache: CachePolicy::Dir(cache.to_path_buf()),
+        ..Default::default()
+    };
+    let plants = vec![common::test_tree()];
+    let mut r = Renderer::new(&gpu, &scene, &plants, &options).expect("renderer");
+    r.render(&gpu, camera, &scene.sun).expect("frame");
+    r.radiance_mean(&gpu, [16, 16, 32, 32]).expect("radiance")
+}
+
+fn temp_cache(name: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("sylvan-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// A camera `s` metres from `target` at view zenith `zenith_deg` (on the side away from the
+/// sun), `fov_deg` wide.
+fn camera_at(target: Vec3, zenith_deg: f32, s: f32, fov_deg: f32) -> Camera {
+    let t = zenith_deg.to_radians();
+    Camera {
+        position: target + s * Vec3::new(0.0, t.cos(), -t.sin()),
+        look_at: target,
+        fov_deg,
+    }
+}
+
+/// The largest per-channel relative change from `b` to `a`.
+fn step(a: [f32; 3], b: [f32; 3]) -> f32 {
+    (0..3)
+        .map(|c| (a[c] - b[c]).abs() / b[c].max(1e-6))
+        .fold(0.0, f32::max)
+}
+
+#[test]
+fn the_handover_to_the_field_is_continuous() {
+    // BN12 §7 (plan test 12d): one view of one patch of the stand, 160 m away, drawn by chains
+    // whose s_max puts the patch at 0.79/0.81 and 0.99/1.01 of it — across the start of the
+    // trees' fade and across s_max itself: the patch's mean radiance changes by under 1 %.
+    // With the hard switch (`shadermap.handover=false`, the negative control) the step at
+    // s_max is larger than that.
+    let cache = temp_cache("handover");
+    // Steep and narrow, so the trees in the measured half of the frame lie within ±1 % of d.
+    let d = 160.0;
+    let camera = camera_at(Vec3::new(300.0, 0.0, 300.0), 30.0, d, 4.0);
+    let at = |k: f32, extra: &[&str]| chain_radiance(d / k, None, &camera, extra, true, &cache);
+    let fade_start = step(at(0.79, &[]), at(0.81, &[]));
+    let at_s_max = step(at(0.99, &[]), at(1.01, &[]));
+    let hard = ["shadermap.handover=false"];
+    let hard_step = step(at(0.99, &hard), at(1.01, &hard));
+    eprintln!(
+        "largest per-channel change: 0.79→0.81 s_max {:.2} %, 0.99→1.01 s_max {:.2} %, hard switch {:.2} %",
+        100.0 * fade_start,
+        100.0 * at_s_max,
+        100.0 * hard_step
+    );
+    let _ = std::fs::remove_dir_all(&cache);
+    assert!(fade_start < 0.01, "0.79 → 0.81 s_max: {fade_start}");
+    assert!(at_s_max < 0.01, "0.99 → 1.01 s_max: {at_s_max}");
+    assert!(
+        hard_step > 0.01,
+        "the hard switch should step at s_max (the metric must see a pop): {hard_step}"
+    );
+}
+
+#[test]
+fn zfield_trees_fade_linearly_into_the_field() {
+    // BN12 §7 (plan test 12f): a tree (its trunk base) at 0.9 s_max covers (1 − smoothstep(0.8, 1, 0.9)) = ½ of
+    // what it covers nearer, in linear radiance against the bare ground, from one camera (the
+    // chain's s_max moves). The field's density is 0 and ν is forced to 0, so neither the
+    // ground nor the tree's lighting changes; no shadows.
+    let cache = temp_cache("fade");
+    let tree = [TreeInstance {
+        position: Vec3::new(300.0, 0.0, 300.0),
+        species: 0,
+        seed: 0,
+        height: 10.0,
+        rotation: 0.0,
+    }];
+    let camera = camera_at(Vec3::new(300.0, 5.0, 300.0), 70.0, 100.0, 5.0);
+    // The fade goes by the tree's own distance (its trunk base), as the chain's bands do.
+    let d = camera.position.distance(tree[0].position);
+    let extra = ["shadermap.density_scale=0", "shadermap.nu=0"];
+    let at = |k: f32| chain_radiance(d / k, Some(&tree), &camera, &extra, false, &cache);
+    let (near, faded, gone) = (at(0.5), at(0.9), at(1.2));
+    let _ = std::fs::remove_dir_all(&cache);
+    // The channel where the tree differs most from the ground.
+    let c = (0..3)
+        .max_by(|&a, &b| {
+            (near[a] - gone[a])
+                .abs()
+                .total_cmp(&(near[b] - gone[b]).abs())
+        })
+        .unwrap();
+    let share = (faded[c] - gone[c]) / (near[c] - gone[c]);
+    eprintln!("near {near:?}, at 0.9 s_max {faded:?}, beyond {gone:?}: coverage share {share:.4}");
+    assert!(
+        (near[c] - gone[c]).abs() > 0.2 * gone[c],
+        "the tree must show against the ground: {near:?} vs {gone:?}"
+    );
+    assert!(
+        (share - 0.5).abs() <= 0.02,
+        "coverage share at 0.9 s_max: {share}"
+    );
+}

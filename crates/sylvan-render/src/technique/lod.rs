@@ -12,7 +12,6 @@
 //! frame (no allocation), and its technique is built once like a stand-alone one, from the
 //! registry.
 
-use super::common::smoothstep;
 use super::params::{self, NoParams};
 use super::registry::{self, Entry, Kind};
 use super::{BandRange, BuildContext, Built, DrawContext, DrawCounts, FrameInput, Technique};
@@ -47,9 +46,9 @@ pub struct Band {
 fn member(name: &str, place: &str) -> Result<&'static str, RenderError> {
     let e =
         registry::find(name.trim()).map_err(|e| RenderError::Option(format!("{place}: {e}")))?;
-    if e.kind != Kind::PerTree {
+    if !matches!(e.kind, Kind::PerTree | Kind::Field) {
         return Err(RenderError::Option(format!(
-            "{place}: '{}' cannot be a band of the chain yet — use one of: {}",
+            "{place}: '{}' cannot be a band of the chain — use one of: {}",
             e.name,
             chainable().join(", ")
         )));
@@ -57,13 +56,18 @@ fn member(name: &str, place: &str) -> Result<&'static str, RenderError> {
     Ok(e.name)
 }
 
-/// Techniques a chain may use.
+/// Techniques a chain may use (a field only as its last band).
 pub fn chainable() -> Vec<&'static str> {
     registry::REGISTRY
         .iter()
-        .filter(|e| e.kind == Kind::PerTree)
+        .filter(|e| matches!(e.kind, Kind::PerTree | Kind::Field))
         .map(|e| e.name)
         .collect()
+}
+
+/// Whether `technique` is a forest field (drawn on the terrain, not per tree).
+fn is_field(technique: &str) -> bool {
+    registry::find(technique).is_ok_and(|e| e.kind == Kind::Field)
 }
 
 /// Checks that `bands` are contiguous, start at 0 and end open.
@@ -86,6 +90,22 @@ fn check_bands(bands: &[Band]) -> Result<(), RenderError> {
                 return Err(bad("the first band must start at 0 — start it at 0".into()));
             }
             _ => {}
+        }
+    }
+    if let Some(i) = bands.iter().position(|b| is_field(b.technique)) {
+        let b = &bands[i];
+        if i + 1 != bands.len() {
+            return Err(RenderError::Option(format!(
+                "{}: a forest field ('{}') draws everything beyond its start, so it can only be the last band — move it to the end",
+                b.place, b.technique
+            )));
+        }
+        if i == 0 {
+            return Err(RenderError::Option(format!(
+                "{}: a forest field needs a band of trees before it — start the chain with a per-tree technique, e.g. \"zfield:0-{}\"",
+                b.place,
+                if b.start > 0.0 { b.start } else { 1500.0 }
+            )));
         }
     }
     match bands.last() {
@@ -164,21 +184,35 @@ pub fn parse_chain(entries: &[String]) -> Result<Vec<Band>, RenderError> {
     Ok(bands)
 }
 
-/// Presence of band `i` for a tree at `distance`: 1 inside the band, cross-fading over ±FADE
-/// of each inner boundary; the presences of all bands sum to 1.
-pub fn presence(bands: &[Band], i: usize, distance: f32) -> f32 {
+/// Band `i`'s distance range and fades: ±[`FADE`] of each inner boundary, except before a
+/// forest field, where the band fades over `[0.8, 1] × s_max` (BN12 §7, `s_max` the field's
+/// start) — or, with `self_fading` (its technique fades itself, [`Technique::fades_to_field`]),
+/// stops at `s_max`.
+pub fn band_range(bands: &[Band], i: usize, self_fading: bool) -> BandRange {
     let b = &bands[i];
-    let rise = if i == 0 {
-        1.0
-    } else {
-        smoothstep(b.start * (1.0 - FADE), b.start * (1.0 + FADE), distance)
-    };
-    let fall = if i + 1 == bands.len() {
-        1.0
-    } else {
-        1.0 - smoothstep(b.end * (1.0 - FADE), b.end * (1.0 + FADE), distance)
-    };
-    rise * fall
+    let before_field = bands.get(i + 1).is_some_and(|n| is_field(n.technique));
+    BandRange {
+        start: b.start,
+        end: b.end,
+        end_fade: before_field.then_some(match self_fading {
+            true => [b.end, b.end],
+            false => [FIELD_FADE_START * b.end, b.end],
+        }),
+    }
+}
+
+/// Where the trees before a forest field start fading, relative to its start (BN12 §7).
+pub const FIELD_FADE_START: f32 = 0.8;
+
+/// Presence of band `i` for a tree at `distance`: 1 inside the band, cross-fading over ±FADE
+/// of each inner boundary; the presences of all bands sum to 1. A forest field lists no
+/// trees (presence 0); the trees before it fade over `[0.8, 1]` of its start, the field
+/// taking the rest on the terrain.
+pub fn presence(bands: &[Band], i: usize, distance: f32) -> f32 {
+    if is_field(bands[i].technique) {
+        return 0.0;
+    }
+    band_range(bands, i, false).presence(distance)
 }
 
 /// Whether every band of `scene`'s chain is GPU-driven (then the chain is).
@@ -194,17 +228,19 @@ pub(crate) fn gpu_driven(scene: &sylvan_scene::Scene) -> Result<bool, RenderErro
 }
 
 /// Fills each band's instance list from the frame's.
+/// Fills each band's instance list from the frame's (`ranges`: each band's, `None` for a
+/// field, which lists no trees).
 pub(crate) fn split(
     gpu: &sylvan_gpu::Gpu,
-    bands: &[Band],
+    ranges: &[Option<BandRange>],
     lists: &mut [Instances],
     master: &Instances,
     eye: Vec3,
 ) {
-    for (i, list) in lists.iter_mut().enumerate() {
+    for (range, list) in ranges.iter().zip(lists.iter_mut()) {
         list.fill_from(gpu, master, |r: &GpuTreeInstance| {
             let d = Vec3::new(r.base_scale[0], r.base_scale[1], r.base_scale[2]).distance(eye);
-            presence(bands, i, d)
+            range.map_or(0.0, |b| b.presence(d))
         });
     }
 }
@@ -226,7 +262,10 @@ pub const ENTRY: Entry = Entry {
 
 /// The `auto` chain: a technique and an instance list per band.
 pub struct Chain {
-    bands: Vec<Band>,
+    /// Each band's range and fades as built (`None`: the forest field, listing no trees).
+    ranges: Vec<Option<BandRange>>,
+    /// The forest field of the last band, when the chain ends in one.
+    field: Option<super::shadermap::field::ForestField>,
     techniques: Vec<Box<dyn Technique>>,
     lists: Vec<Instances>,
     /// Each band's technique's own list windows (those of its `list_requests`, fixed at
@@ -247,28 +286,40 @@ impl Chain {
         } else {
             from_tables(&cx.scene.lod_bands)?
         };
-        let mut techniques = Vec::with_capacity(bands.len());
-        let mut reports = Vec::new();
-        let mut lists = Vec::with_capacity(bands.len());
-        for band in &bands {
-            let settings: Vec<Setting> = cx
-                .scene
+        let settings_of = |band: &Band| -> Vec<Setting> {
+            cx.scene
                 .technique_params
                 .iter()
                 .chain(&band.settings)
                 .chain(cx.overrides)
                 .cloned()
-                .collect();
+                .collect()
+        };
+        let n = bands.len();
+        let mut techniques: Vec<Option<Box<dyn Technique>>> = (0..n).map(|_| None).collect();
+        let mut ranges: Vec<Option<BandRange>> = vec![None; n];
+        let mut reports = Vec::new();
+        // The field first (it can only be last): the bands before it are built with it.
+        let mut field = None;
+        let field_band = bands.iter().position(|b| is_field(b.technique));
+        let order = field_band
+            .into_iter()
+            .chain((0..n).filter(|&i| Some(i) != field_band));
+        for i in order {
+            let band = &bands[i];
+            let settings = settings_of(band);
+            let range = match Some(i) == field_band {
+                true => BandRange::new(band.start, band.end),
+                false => band_range(&bands, i, false),
+            };
             let mut sub = BuildContext {
                 gpu: cx.gpu,
                 frame: cx.frame,
                 scene: cx.scene,
                 plants: cx.plants,
                 population: cx.population,
-                band: BandRange {
-                    start: band.start,
-                    end: band.end,
-                },
+                band: range,
+                field: field.as_ref(),
                 settings: &settings,
                 overrides: cx.overrides,
                 policy: cx.policy,
@@ -276,14 +327,27 @@ impl Chain {
             };
             let entry = registry::find(band.technique)?;
             let built = (entry.build)(&mut sub)?;
-            techniques.push(built.technique);
+            if Some(i) == field_band {
+                field = built.technique.field().cloned();
+            } else {
+                ranges[i] = Some(band_range(&bands, i, built.technique.fades_to_field()));
+            }
+            techniques[i] = Some(built.technique);
             reports.extend(built.reports);
-            lists.push(Instances::derived(
-                cx.gpu,
-                cx.population.capacity(),
-                cx.population.species_count(),
-            ));
         }
+        let techniques: Vec<Box<dyn Technique>> = techniques.into_iter().flatten().collect();
+        let lists = ranges
+            .iter()
+            .map(|r| {
+                // A field lists no trees.
+                let capacity = if r.is_some() {
+                    cx.population.capacity()
+                } else {
+                    1
+                };
+                Instances::derived(cx.gpu, capacity, cx.population.species_count())
+            })
+            .collect();
         let request_windows: Vec<Vec<[f32; 4]>> = techniques
             .iter()
             .map(|t| t.list_requests().iter().map(|r| r.window).collect())
@@ -294,7 +358,8 @@ impl Chain {
         }
         Ok(Built {
             technique: Box::new(Self {
-                bands,
+                ranges,
+                field,
                 techniques,
                 lists,
                 request_windows,
@@ -309,12 +374,7 @@ impl Chain {
     /// Band `i`'s presence window ([`BandRange::window`]; bands start at 0 and end open, so
     /// the chain's two ends are open).
     fn band_window(&self, i: usize) -> [f32; 4] {
-        let b = &self.bands[i];
-        BandRange {
-            start: b.start,
-            end: b.end,
-        }
-        .window()
+        self.ranges[i].map_or([1e30; 4], |r| r.window())
     }
 }
 
@@ -331,7 +391,7 @@ impl Technique for Chain {
     ) -> Result<(), RenderError> {
         split(
             gpu,
-            &self.bands,
+            &self.ranges,
             &mut self.lists,
             input.instances,
             input.eye,
@@ -442,6 +502,11 @@ impl Technique for Chain {
         out
     }
 
+    /// The last band's forest field, which the terrain is shaded with.
+    fn field(&self) -> Option<&super::shadermap::field::ForestField> {
+        self.field.as_ref()
+    }
+
     fn atlas_preview(&self) -> Option<&image::RgbaImage> {
         self.techniques.iter().find_map(|t| t.atlas_preview())
     }
@@ -477,6 +542,30 @@ mod tests {
             let e = chain(bad).unwrap_err().to_string();
             assert!(e.contains('—'), "{e}");
         }
+    }
+
+    #[test]
+    fn a_field_is_only_the_last_band() {
+        let b = chain(&["zfield:0-500", "shadermap:500-"]).unwrap();
+        assert_eq!(b[1].technique, "shadermap");
+        for bad in [
+            &["shadermap:0-500", "zfield:500-"][..],
+            &["zfield:0-500", "shadermap:500-900", "shadermap:900-"],
+            &["shadermap:0-"],
+        ] {
+            let e = chain(bad).unwrap_err().to_string();
+            assert!(e.contains('—') && e.contains("field"), "{bad:?}: {e}");
+        }
+        // The trees before the field fade over [0.8, 1] of its start (BN12 §7), unless their
+        // technique fades itself (then they stop at the start); the field lists no trees.
+        let fading = band_range(&b, 0, false);
+        assert_eq!(fading.presence(399.0), 1.0);
+        assert!((fading.presence(450.0) - 0.5).abs() < 1e-6);
+        assert_eq!(fading.presence(500.0), 0.0);
+        let own = band_range(&b, 0, true);
+        assert_eq!(own.presence(499.0), 1.0);
+        assert_eq!(own.presence(500.0), 0.0);
+        assert_eq!(presence(&b, 1, 2000.0), 0.0);
     }
 
     #[test]

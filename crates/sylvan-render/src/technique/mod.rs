@@ -58,6 +58,10 @@ pub struct BandRange {
     pub start: f32,
     /// End distance (metres, `f32::INFINITY` for an open end).
     pub end: f32,
+    /// Where the band's presence falls to 0, when it is not ±[`lod::FADE`] of `end`: the band
+    /// before a forest field fades over `[0.8, 1] × end` (BN12 §7), or stops at `end` when its
+    /// technique fades itself into the field ([`Technique::fades_to_field`]).
+    pub end_fade: Option<[f32; 2]>,
 }
 
 impl BandRange {
@@ -65,21 +69,43 @@ impl BandRange {
     pub const ALL: Self = Self {
         start: 0.0,
         end: f32::INFINITY,
+        end_fade: None,
     };
 
+    /// `start..end` with the chain's usual cross-fades.
+    pub fn new(start: f32, end: f32) -> Self {
+        Self {
+            start,
+            end,
+            end_fade: None,
+        }
+    }
+
     /// The band's presence window as the `auto` chain fades it ([`crate::world::ListRequest`]'s
-    /// `window`): rising over ±[`lod::FADE`] of its start, falling over ±`FADE` of its end;
-    /// open below a start of 0 and above an infinite end.
+    /// `window`): rising over ±[`lod::FADE`] of its start, falling over ±`FADE` of its end
+    /// (or over `end_fade`); open below a start of 0 and above an infinite end.
     pub fn window(&self) -> [f32; 4] {
         let (lo, hi) = (1.0 - lod::FADE, 1.0 + lod::FADE);
         let open_start = self.start <= 0.0;
         let open_end = !self.end.is_finite();
+        let [fall0, fall1] = match (open_end, self.end_fade) {
+            (true, _) => [1e30, 1e30],
+            (false, Some(f)) => f,
+            (false, None) => [self.end * lo, self.end * hi],
+        };
         [
             if open_start { -1e30 } else { self.start * lo },
             if open_start { -1e30 } else { self.start * hi },
-            if open_end { 1e30 } else { self.end * lo },
-            if open_end { 1e30 } else { self.end * hi },
+            fall0,
+            fall1,
         ]
+    }
+
+    /// The presence of a tree at `distance` under [`BandRange::window`] (as `cull.wgsl`'s
+    /// `ramp` computes it on the GPU).
+    pub fn presence(&self, distance: f32) -> f32 {
+        let [a, b, c, d] = self.window();
+        common::smoothstep(a, b, distance) * (1.0 - common::smoothstep(c, d, distance))
     }
 }
 
@@ -97,6 +123,9 @@ pub struct BuildContext<'a> {
     pub population: &'a Instances,
     /// The distance band this technique draws.
     pub band: BandRange,
+    /// The forest field the chain ends in (BN12's shader-map), for the per-tree techniques
+    /// that converge to it (`zfield`'s eq. 22–23 and fade); `None` alone or without one.
+    pub field: Option<&'a shadermap::field::ForestField>,
     /// Settings in force (the scene's tables, the band's, `--set`), in the order they apply;
     /// a technique reads those for its own name ([`BuildContext::settings_for`]).
     pub settings: &'a [Setting],
@@ -228,6 +257,12 @@ pub trait Technique: Send {
     /// one: the renderer builds the terrain's pipeline with it.
     fn field(&self) -> Option<&shadermap::field::ForestField> {
         None
+    }
+    /// Whether the technique fades its own trees out towards the forest field it was built
+    /// with (BN12 §7: opacity × (1 − smoothstep(0.8, 1, s/s_max)) per pixel, the ground taking
+    /// eq. 26–27): the chain then stops its band at `s_max` instead of fading its presence.
+    fn fades_to_field(&self) -> bool {
+        false
     }
 }
 

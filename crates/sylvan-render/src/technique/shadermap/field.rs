@@ -16,9 +16,34 @@ struct GpuFieldParams {
     density: [f32; 4],
     tree_albedo: [f32; 4],
     light: [f32; 4],
+    handover: [f32; 4],
 }
 
-/// The field's GPU resources: group 1 of the terrain's forest pipeline.
+/// Where and how the field takes over from the trees (BN12 §7).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Handover {
+    /// s_max: the distance from which the field alone draws the forest (m; 0: the field
+    /// everywhere, no trees drawn).
+    pub s_max: f32,
+    /// ν of eq. 22–25 forced to this value (`None`: BN12's smoothstep(0, 0.8, s/s_max)).
+    pub nu: Option<f32>,
+    /// The trees fade over [0.8, 1] × s_max while the ground takes their share (eq. 26–27);
+    /// `false`: a hard switch at s_max (a negative control for popping).
+    pub fade: bool,
+}
+
+impl Handover {
+    /// The field alone: no trees, eq. 13 everywhere.
+    pub const ALONE: Self = Self {
+        s_max: 0.0,
+        nu: None,
+        fade: true,
+    };
+}
+
+/// The field's GPU resources: group 1 of the terrain's forest pipeline, group 2 of the
+/// `zfield` trees before it.
+#[derive(Clone)]
 pub struct ForestField {
     /// The group's layout (binding 0 the field, 1–4 the tables).
     pub layout: wgpu::BindGroupLayout,
@@ -30,12 +55,14 @@ pub struct ForestField {
 
 impl ForestField {
     /// Uploads `tables` for a forest of `density` trees per m², the trees lit as `zfield`
-    /// lights them (`draw`: `sun_scale`, `sky_scale`, `a1`, `a2`).
+    /// lights them (`draw`: `sun_scale`, `sky_scale`, `a1`, `a2`), taking over from the drawn
+    /// trees as `handover` says.
     pub fn new(
         gpu: &Gpu,
         tables: &ShaderMapTables,
         density: f32,
         draw: &ZFieldDrawParams,
+        handover: Handover,
     ) -> Result<Self, RenderError> {
         let t = GpuTables::upload(gpu, tables)?;
         let device = &gpu.device;
@@ -54,6 +81,12 @@ impl ForestField {
             density: [density.max(0.0), 0.0, 0.0, 0.0],
             tree_albedo: [r, g, b, 0.0],
             light: [draw.sun_scale, draw.sky_scale, draw.a1, draw.a2],
+            handover: [
+                handover.s_max.max(0.0),
+                handover.nu.map_or(-1.0, |n| n.clamp(0.0, 1.0)),
+                if handover.fade { 1.0 } else { 0.0 },
+                0.0,
+            ],
         };
         let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("shadermap_field_params"),
@@ -72,14 +105,29 @@ impl ForestField {
     }
 }
 
-/// The terrain shader with the field: `terrain.wgsl`, the tables (group 1, bindings 1–4) and
-/// `field.wgsl` (`fs_terrain_forest`).
+/// The field's WGSL in group `group` (binding 0 the field, 1–4 the tables): the tables,
+/// `field_common.wgsl`, then `tail` — `"field"` (the terrain's `fs_terrain_forest`) or
+/// `"field_zfield"` (the trees before the field).
+pub(crate) fn field_wgsl(group: u32, tail: &str) -> String {
+    let tail = match tail {
+        "field" => include_str!("field.wgsl"),
+        "field_zfield" => include_str!("field_zfield.wgsl"),
+        other => unreachable!("no field shader {other}"),
+    };
+    format!(
+        "{}\n{}\n{}",
+        tables_wgsl(group, 1),
+        include_str!("field_common.wgsl").replace("@group(FIELD)", &format!("@group({group})")),
+        tail
+    )
+}
+
+/// The terrain shader with the field: `terrain.wgsl` then [`field_wgsl`] in group 1.
 pub(crate) fn terrain_source() -> String {
     crate::pipeline::with_frame(&format!(
-        "{}\n{}\n{}",
+        "{}\n{}",
         include_str!("../../shaders/terrain.wgsl"),
-        tables_wgsl(1, 1),
-        include_str!("field.wgsl")
+        field_wgsl(1, "field")
     ))
 }
 

@@ -114,26 +114,53 @@ impl Default for ShaderMapBakeParams {
 pub struct ShaderMapDrawParams {
     /// Scale of the field's tree density (the scene's trees over its area): 0 is bare terrain.
     pub density_scale: f32,
+    /// BN12 §7's handover as the last band of `auto`: the trees fade over [0.8, 1] × its
+    /// start while the ground takes their share; `false`: a hard switch (for measuring pops).
+    pub handover: bool,
+    /// ν of eq. 22–25 forced (0 to 1); −1: BN12's smoothstep(0, 0.8, s/s_max).
+    pub nu: f32,
 }
 
 impl Default for ShaderMapDrawParams {
     fn default() -> Self {
-        Self { density_scale: 1.0 }
+        Self {
+            density_scale: 1.0,
+            handover: true,
+            nu: -1.0,
+        }
     }
 }
 
 impl ParamTable for ShaderMapDrawParams {
-    const DOCS: &'static [ParamDoc] = &[ParamDoc {
-        key: "density_scale",
-        unit: "×",
-        doc: "scale of the field's tree density (the scene's trees over its area); 0 draws bare terrain (0–100)",
-    }];
+    const DOCS: &'static [ParamDoc] = &[
+        ParamDoc {
+            key: "density_scale",
+            unit: "×",
+            doc: "scale of the field's tree density (the scene's trees over its area); 0 draws bare terrain (0–100)",
+        },
+        ParamDoc {
+            key: "handover",
+            unit: "",
+            doc: "as the last band of auto: trees fade over [0.8, 1] × the band's start while the ground takes their share (BN12 §7); false: a hard switch",
+        },
+        ParamDoc {
+            key: "nu",
+            unit: "",
+            doc: "ν of BN12 eq. 22–25 forced (0–1: how far near trees and ground are lit with the field's means); −1: smoothstep(0, 0.8, s/s_max)",
+        },
+    ];
 
     fn validate(&self) -> Result<(), String> {
         if !(0.0..=100.0).contains(&self.density_scale) {
             return Err(format!(
                 "shadermap density_scale {}: must be 0 to 100",
                 self.density_scale
+            ));
+        }
+        if !(self.nu == -1.0 || (0.0..=1.0).contains(&self.nu)) {
+            return Err(format!(
+                "shadermap nu {}: must be 0 to 1, or −1 for BN12's ν",
+                self.nu
             ));
         }
         Ok(())
@@ -198,11 +225,11 @@ impl ParamTable for ShaderMapBakeParams {
 }
 
 /// The registry entry: `shadermap` drawn alone (the terrain carries the forest; no tree is
-/// drawn). It is not a band of the `auto` chain yet.
+/// drawn), or as the last band of `auto` (the field from the band's start on).
 pub const ENTRY: super::registry::Entry = super::registry::Entry {
     name: "shadermap",
     kind: super::registry::Kind::Field,
-    summary: "BN12 §6 shader-map: the forest as a field on the terrain, from tables measured on z-field patches (drawn alone; no trees)",
+    summary: "BN12 §6–7 shader-map: the forest as a field on the terrain, from tables measured on z-field patches (alone, or the last band of auto)",
     debug_color: [0.55, 0.35, 0.85],
     gpu_driven: true,
     schema: super::params::schema::<ShaderMapBakeParams, ShaderMapDrawParams>,
@@ -228,7 +255,14 @@ pub const ENTRY: super::registry::Entry = super::registry::Entry {
         let [x, z] = cx.scene.terrain.size;
         let density = (cx.scene.estimated_trees() / (x as f64 * z as f64).max(1.0)) as f32
             * own.density_scale;
-        let field = field::ForestField::new(cx.gpu, &tables, density, &draw)?;
+        // Alone (start 0) the field draws everything; as a chain's last band it takes over
+        // from the trees at its start.
+        let handover = field::Handover {
+            s_max: cx.band.start,
+            nu: (own.nu >= 0.0).then_some(own.nu),
+            fade: own.handover,
+        };
+        let field = field::ForestField::new(cx.gpu, &tables, density, &draw, handover)?;
         Ok(super::Built {
             technique: Box::new(field::ShaderMap { field }),
             reports: vec![report],

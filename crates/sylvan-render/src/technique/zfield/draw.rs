@@ -53,6 +53,9 @@ pub struct ZField {
     pipeline: wgpu::RenderPipeline,
     shadow_pipeline: wgpu::RenderPipeline,
     bind: wgpu::BindGroup,
+    /// The forest field's group 2 (BN12 §7: lighting towards its means, the fade into it),
+    /// when the chain ends in one.
+    field: Option<wgpu::BindGroup>,
     static_bytes: u64,
     /// Per species: the model-space centre of its frames (the back-to-front sort of `blend`).
     centres: Vec<Vec3>,
@@ -239,7 +242,9 @@ impl ZFieldBindings {
 
 impl ZField {
     /// Uploads every species' views into the atlases and builds the pipelines.
-    /// `density` is the tree density Λ_h of eq. 9 (trees per m²).
+    /// `density` is the tree density Λ_h of eq. 9 (trees per m²); with `field` (the forest
+    /// field the chain ends in) the trees converge to its lighting and fade into it.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         gpu: &Gpu,
         frame: &FrameResources,
@@ -248,13 +253,20 @@ impl ZField {
         bake: &ZFieldBakeParams,
         draw: &ZFieldDrawParams,
         density: f32,
+        field: Option<&crate::technique::shadermap::field::ForestField>,
     ) -> Result<Self, RenderError> {
         let ZFieldBindings {
             layout: bind_layout,
             bind,
             bytes: static_bytes,
         } = ZFieldBindings::upload(gpu, plants, baked, bake, draw, density)?;
-        let module = sylvan_gpu::shader(gpu, "zfield", &super::shader_source());
+        let source = match field {
+            Some(_) => super::shader_source_with_field(),
+            None => super::shader_source(),
+        };
+        let module = sylvan_gpu::shader(gpu, "zfield", &source);
+        let mut main_layouts = vec![&frame.main_layout, &bind_layout];
+        main_layouts.extend(field.map(|f| &f.layout));
         let buffers = [None, Some(GpuTreeInstance::LAYOUT)];
         let build = |label, vs, fs, pass, layouts: &[&wgpu::BindGroupLayout], blend| {
             pipeline::build(
@@ -282,7 +294,7 @@ impl ZField {
                 "vs_zfield",
                 "fs_zfield_blend",
                 PassKind::Main,
-                &[&frame.main_layout, &bind_layout],
+                &main_layouts,
                 Some(common::PREMULTIPLIED_OVER),
             )
         } else {
@@ -291,7 +303,7 @@ impl ZField {
                 "vs_zfield",
                 "fs_zfield",
                 PassKind::Main,
-                &[&frame.main_layout, &bind_layout],
+                &main_layouts,
                 None,
             )
         };
@@ -307,6 +319,7 @@ impl ZField {
             pipeline,
             shadow_pipeline,
             bind,
+            field: field.map(|f| f.bind.clone()),
             static_bytes,
             centres: baked.iter().map(|b| Vec3::from(b.centre)).collect(),
             blend: draw.blend,
@@ -344,13 +357,16 @@ impl Technique for ZField {
     }
 
     fn draw(&self, pass: &mut wgpu::RenderPass<'_>, ctx: &DrawContext<'_>) -> DrawCounts {
-        let pipeline = match ctx.shadow_cascade() {
-            None => &self.pipeline,
-            Some(_) => &self.shadow_pipeline,
-        };
-        pass.set_pipeline(pipeline);
+        let main = ctx.shadow_cascade().is_none();
+        pass.set_pipeline(match main {
+            true => &self.pipeline,
+            false => &self.shadow_pipeline,
+        });
         pass.set_bind_group(0, ctx.frame_bind, &[]);
         pass.set_bind_group(1, &self.bind, &[]);
+        if let (true, Some(field)) = (main, &self.field) {
+            pass.set_bind_group(2, field, &[]);
+        }
         if let Some(culled) = ctx.culled.first() {
             let Some(instances) = culled.instances(ctx.pass, 0) else {
                 return DrawCounts::default();
@@ -396,5 +412,10 @@ impl Technique for ZField {
 
     fn reallocations(&self) -> u32 {
         self.instances.reallocations
+    }
+
+    /// With a field, the trees fade into it per pixel (`field_zfield.wgsl`).
+    fn fades_to_field(&self) -> bool {
+        self.field.is_some()
     }
 }

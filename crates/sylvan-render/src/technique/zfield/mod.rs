@@ -351,22 +351,40 @@ pub const ENTRY: Entry = Entry {
         let density = density(cx.scene, &draw);
         Ok(Built {
             technique: Box::new(ZField::new(
-                cx.gpu, cx.frame, cx.plants, &assets, &bake, &draw, density,
+                cx.gpu, cx.frame, cx.plants, &assets, &bake, &draw, density, cx.field,
             )?),
             reports,
         })
     },
     bake: Some(registry::bake_with::<ZFieldBake, ZFieldDrawParams>),
-    shaders: || vec![("zfield", shader_source())],
+    shaders: || {
+        vec![
+            ("zfield", shader_source()),
+            ("zfield_field", shader_source_with_field()),
+        ]
+    },
 };
 
 /// The WGSL of `zfield` as compiled: the frame's group 0, `bindings.wgsl` (group 1), the
-/// direction grid's lookup, then `zfield.wgsl`.
+/// direction grid's lookup, `zfield.wgsl`, and its own lighting everywhere (`field_none.wgsl`).
 pub(crate) fn shader_source() -> String {
     crate::pipeline::with_frame(&format!(
-        "{}\n{}\n{}",
+        "{}\n{}\n{}\n{}",
         include_str!("bindings.wgsl"),
         crate::directions::HEMI_GRID_WGSL,
-        include_str!("zfield.wgsl")
+        include_str!("zfield.wgsl"),
+        include_str!("field_none.wgsl")
+    ))
+}
+
+/// The WGSL of `zfield` before a forest field: as [`shader_source`], with the field's tables
+/// and terms in group 2 and `field_zfield.wgsl` in place of `field_none.wgsl` (BN12 §7).
+pub(crate) fn shader_source_with_field() -> String {
+    crate::pipeline::with_frame(&format!(
+        "{}\n{}\n{}\n{}",
+        include_str!("bindings.wgsl"),
+        crate::directions::HEMI_GRID_WGSL,
+        include_str!("zfield.wgsl"),
+        crate::technique::shadermap::field::field_wgsl(2, "field_zfield")
     ))
 }

@@ -295,15 +295,16 @@ fn z_fragment(in: ZOut, masked: bool) -> ZFragment {
     let q = hit.q;
     let alpha_v = hit.alpha_v;
     let delta_v = hit.delta_v;
-    // Coverage: presence (LOD cross-fade) by optical depth, then the tree's mask.
-    let a = presence_alpha(alpha_v, in.rot.w);
+    let world = instance_to_world(pv, in.base_scale, in.rot);
+    // Coverage: presence (LOD cross-fade) by optical depth, the fade into a forest field
+    // (linear in opacity, by the tree's own distance: BN12 §7), then the tree's mask.
+    let a = presence_alpha(alpha_v, in.rot.w) * field_fade(in.base_scale.xyz);
     if (masked && a <= mask_threshold(in.pos.xy, in.base_scale, in.rot.z)) {
         discard;
     }
     if (!masked && a < 0.004) {
         discard;
     }
-    let world = instance_to_world(pv, in.base_scale, in.rot);
     let lm = instance_dir_to_model(frame.sun_dir.xyz, in.rot);
     let light = z_light(sp, in.light_views.xyz, in.light_weights, pv, lm, in.lod);
     let pl = light.pl;
@@ -321,15 +322,17 @@ fn z_fragment(in: ZOut, masked: bool) -> ZFragment {
     // isotropic (scaled by `sun_scale`), optionally blended towards the reference's leaf
     // response at the baked normal (`normal_weight`).
     let phase = zp.sun.y * phase_shape(n, l);
-    let sun = frame.sun_color.rgb * albedo * phase * exp(-tau * path_m) * hotspot(v, l)
-        * sun_visibility(world_l, vec3<f32>(0.0));
+    let vis = sun_visibility(world_l, vec3<f32>(0.0));
+    let sun = frame.sun_color.rgb * albedo * phase * exp(-tau * path_m) * hotspot(v, l) * vis;
     // Eq. 9: sky × δ_v × the cylindrical hole of the local density, d below the crown's top
     // (the slope term (1 + n·u_z)/2 is 1: the terrain normal is not known here).
     let top = instance_to_world(sp.bbox_max.xyz, in.base_scale, in.rot).y;
     let d = max(top - world.y, 0.0);
     let hole = sky_hole(d, zp.sky.y);
     let sky = albedo * sky_light(vec3<f32>(0.0, 1.0, 0.0)) * zp.sky.x * delta_v * hole;
-    let lit = debug_tint(apply_fog(sun + sky, world), world, TECHNIQUE_ZFIELD);
+    // Eq. 22–23: towards the forest field's means as the tree recedes (none without one).
+    let light_v = field_tree_light(sun, sky, albedo, world, v, l, vis);
+    let lit = debug_tint(apply_fog(light_v, world), world, TECHNIQUE_ZFIELD);
     var out: ZFragment;
     out.color = select(vec4<f32>(lit * a, a), vec4<f32>(lit, 1.0), masked);
     let clip = frame.view_proj * vec4<f32>(world, 1.0);

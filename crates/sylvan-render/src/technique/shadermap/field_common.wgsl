@@ -1,0 +1,112 @@
+// The forest field's parameters and BN12 §6's per-pixel terms (eq. 2–5, 14–16, 18–21), shared
+// by the terrain (`field.wgsl`, group 1) and by the `zfield` trees that converge to the field
+// (`field_zfield.wgsl`, group 2). Composed after `field_tables.wgsl`, with `@group(FIELD)`
+// substituted.
+
+struct FieldParams {
+    // x: tree density Λ_h (trees per m²); yzw unused.
+    density: vec4<f32>,
+    // rgb: ρ̄, the trees' mean albedo (linear).
+    tree_albedo: vec4<f32>,
+    // x: `zfield.sun_scale`; y: `zfield.sky_scale`; z: a1; w: a2 (eq. 8).
+    light: vec4<f32>,
+    // x: s_max, where the field takes over from the trees (m; 0: the field everywhere, no
+    // trees); y: ν forced (< 0: BN12's smoothstep(0, 0.8, s/s_max)); z: the §7 handover
+    // (1) or a hard switch at s_max (0).
+    handover: vec4<f32>,
+};
+
+@group(FIELD) @binding(0) var<uniform> field: FieldParams;
+
+// Eq. 2–5 in BN12's transformed space S = diag(1, 2/h, 1): view and light zeniths against the
+// transformed normal, the azimuth between them, and the density's slope factor.
+struct ForestAngles {
+    theta_v: f32,
+    theta_l: f32,
+    phi: f32,
+    slope: f32,
+};
+
+fn forest_angles(v: vec3<f32>, l: vec3<f32>, n: vec3<f32>) -> ForestAngles {
+    let s = vec3<f32>(1.0, 2.0 / table_info.shape.x, 1.0);
+    let sv = normalize(v * s);
+    let sl = normalize(l * s);
+    let ni = normalize(n / s);
+    var out: ForestAngles;
+    let cv = dot(sv, ni);
+    let cl = dot(sl, ni);
+    out.theta_v = acos(clamp(cv, -1.0, 1.0));
+    out.theta_l = acos(clamp(cl, -1.0, 1.0));
+    let a = sv - cv * ni;
+    let b = sl - cl * ni;
+    let ab = length(a) * length(b);
+    out.phi = select(0.0, acos(clamp(dot(a, b) / max(ab, 1e-12), -1.0, 1.0)), ab > 1e-4);
+    out.slope = ni.y / max(n.y, 0.05);
+    return out;
+}
+
+// Eq. 8, as `zfield`'s `hotspot`.
+fn field_hotspot(v: vec3<f32>, l: vec3<f32>) -> f32 {
+    let angle = acos(clamp(dot(v, l), -1.0, 1.0));
+    return 1.0 - field.light.z * (1.0 - exp(-field.light.w * angle));
+}
+
+// The tables at a point of normal `n` seen along `v` (towards the eye), sun `l`: `seen` = Gd
+// (k_g + k_ḡ, eq. 15), `seen_lit` = 𝔾 (k_g, eq. 14), `trees_lit` = 𝕋 (k_t / (k_t + k_t̄),
+// eq. 16), `trees_sky` = 𝔼 (eq. 21), `ground_sky` = 𝔻 (eq. 19).
+struct ForestTerms {
+    seen: f32,
+    seen_lit: f32,
+    trees_lit: f32,
+    trees_sky: f32,
+    ground_sky: f32,
+};
+
+fn forest_terms(v: vec3<f32>, l: vec3<f32>, n: vec3<f32>) -> ForestTerms {
+    let a = forest_angles(v, l, n);
+    let lambda = field.density.x * a.slope;
+    let gt = table_gt(a.theta_v, a.theta_l, a.phi, lambda);
+    let dec = table_dec(a.theta_v, lambda);
+    var out: ForestTerms;
+    out.seen = clamp(table_g_diag(a.theta_v, lambda), 0.0, 1.0);
+    out.seen_lit = clamp(gt.x, 0.0, out.seen);
+    out.trees_lit = gt.y;
+    out.trees_sky = dec.x;
+    out.ground_sky = dec.y;
+    return out;
+}
+
+// Eq. 20–21: the mean radiance of the trees seen, for albedo `rho`, the terrain's own sun
+// visibility `vis`.
+fn forest_trees(t: ForestTerms, rho: vec3<f32>, v: vec3<f32>, l: vec3<f32>, vis: f32) -> vec3<f32> {
+    let it = rho * field.light.x * field_hotspot(v, l) * frame.sun_color.rgb * t.trees_lit * vis;
+    let jt = rho * field.light.y * sky_light(vec3<f32>(0.0, 1.0, 0.0)) * t.trees_sky;
+    return it + jt;
+}
+
+// The sun visibility the field's mean terms take (Ī_g 𝔾/Gd, Ī_t 𝕋) from the cascades' `vis` at
+// distance `s`: 𝔾 and 𝕋 already hold the trees' shadows, so where the cascades hold drawn trees
+// (nearer than s_max, and their shadows up to 10 % beyond) the field takes none (BN12's eq. 17
+// and 20 have no V); farther, and with the field alone, the cascades hold only the terrain and
+// its relief shadows apply (a deviation: BN12 has none).
+fn field_sun_visibility(vis: f32, s: f32) -> f32 {
+    let smax = field.handover.x;
+    if (smax <= 0.0) {
+        return vis;
+    }
+    return mix(1.0, vis, smoothstep(smax, 1.1 * smax, s));
+}
+
+// BN12 §7 at distance `s`: x = ν of eq. 22–25 (smoothstep(0, 0.8, s/s_max), or forced), y =
+// w = smoothstep(0.8, 1, s/s_max), how far the trees have faded into the field (a step at
+// s_max without the handover). Without trees (s_max = 0) both are 1.
+fn field_handover(s: f32) -> vec2<f32> {
+    let smax = field.handover.x;
+    if (smax <= 0.0) {
+        return vec2<f32>(1.0, 1.0);
+    }
+    let t = s / smax;
+    let nu = select(smoothstep(0.0, 0.8, t), field.handover.y, field.handover.y >= 0.0);
+    let w = select(select(0.0, 1.0, t >= 1.0), smoothstep(0.8, 1.0, t), field.handover.z > 0.5);
+    return vec2<f32>(nu, w);
+}
