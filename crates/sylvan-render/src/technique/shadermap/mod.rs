@@ -23,9 +23,15 @@
 //! sun (eq. 17) and sky × 𝔻 (eq. 19), and the trees' mean albedo ρ̄ with `zfield`'s sun scale and
 //! hotspot (eq. 20) and sky scale × 𝔼 (eq. 21).
 //!
+//! **As the last band of `auto`** (§7, e.g. `["zfield:0-1500", "shadermap:1500-"]`): the chain
+//! builds the field first and hands it to the bands before it. `zfield` trees converge to the
+//! field's means (eq. 22–23, ν = smoothstep(0, 0.8, s/s_max)) and fade by their own distance
+//! over [0.8, 1] s_max; the ground converges the same way (eq. 24–25) and takes the trees'
+//! share as they fade (eq. 26–27). Other per-tree bands before a field fade by presence over
+//! the same window. `shadermap.handover=false` is a hard switch; `shadermap.nu` forces ν.
+//!
 //! **Not built yet**: density maps (one density for the whole scene: its trees over its area),
-//! ℂ and coverage tiles, seeds on the GPU, `shadermap` as the last band of `auto` and the
-//! transitions of §7 (eq. 22–27).
+//! ℂ and coverage tiles, seeds on the GPU, the per-tree 3-px rule (s_max is the band's start).
 //!
 //! **Deviations from BN12**, each stated:
 //! - The patch is drawn unscaled and each table direction `v′` of the transformed space
@@ -58,7 +64,15 @@
 //!   interpolated 𝔾 then peaks exactly at θv = θl (0.25° sweeps, θl 20°–80°); on coarse tables
 //!   (5 nodes) the slope of Gd along θ̄ can still pull the peak off it.
 //! - The terrain's relief shadows (the cascades' V) multiply both the ground's and the trees'
-//!   sun (eq. 17, 20 assume flat open sky); the trees' shadows on the ground are in 𝔾.
+//!   sun (eq. 17, 20 assume flat open sky) where the cascades hold no drawn trees (the field
+//!   alone, or beyond 1.1 s_max); nearer, the mean terms take no V (𝔾 and 𝕋 hold the trees'
+//!   shadows), so relief shadows there reach only the (1 − ν) own-lit part.
+//! - Eq. 27's μ is made mean-preserving: μ = c w / (1 − c (1 − w)), c = 1 − Gd, so drawn
+//!   trees fading as (1 − w) plus the ground's share keep the tree fraction c at every w
+//!   (BN12's μ = c w dips to c − c²/4 at w = ½). The fade goes by each tree's trunk distance
+//!   (a tree fades as one), the ground's by the pixel's.
+//! - Eq. 22's tree term keeps each tree's own albedo (its mean is the tables' ρ̄) and assumes
+//!   flat ground (the zfield shader does not know the terrain normal).
 //! - One table set for the scene's species mix, h and A area-weighted over it (BN12 §10 allows
 //!   per-mix sets); the patch is a periodic Poisson tile with the scene's pattern radius, not
 //!   the terrain's own tiling, so the wrap-around is exact. Density nodes are the patch's
