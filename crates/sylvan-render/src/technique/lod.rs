@@ -227,7 +227,6 @@ pub(crate) fn gpu_driven(scene: &sylvan_scene::Scene) -> Result<bool, RenderErro
         .all(|b| registry::find(b.technique).is_ok_and(|e| e.gpu_driven)))
 }
 
-/// Fills each band's instance list from the frame's.
 /// Fills each band's instance list from the frame's (`ranges`: each band's, `None` for a
 /// field, which lists no trees).
 pub(crate) fn split(

@@ -259,8 +259,8 @@ pub trait Technique: Send {
         None
     }
     /// Whether the technique fades its own trees out towards the forest field it was built
-    /// with (BN12 §7: opacity × (1 − smoothstep(0.8, 1, s/s_max)) per pixel, the ground taking
-    /// eq. 26–27): the chain then stops its band at `s_max` instead of fading its presence.
+    /// with (BN12 §7: opacity × (1 − smoothstep(0.8, 1, s/s_max)), s the tree's distance, the
+    /// ground taking eq. 26–27): the chain then stops its band at `s_max` instead of fading its presence.
     fn fades_to_field(&self) -> bool {
         false
     }

@@ -32,15 +32,6 @@ pub struct Handover {
     pub fade: bool,
 }
 
-impl Handover {
-    /// The field alone: no trees, eq. 13 everywhere.
-    pub const ALONE: Self = Self {
-        s_max: 0.0,
-        nu: None,
-        fade: true,
-    };
-}
-
 /// The field's GPU resources: group 1 of the terrain's forest pipeline, group 2 of the
 /// `zfield` trees before it.
 #[derive(Clone)]
@@ -105,14 +96,21 @@ impl ForestField {
     }
 }
 
+/// Who composes the field's WGSL.
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum FieldUser {
+    /// The terrain (`field.wgsl`: `fs_terrain_forest`).
+    Terrain,
+    /// The `zfield` trees before the field (`field_zfield.wgsl`).
+    ZField,
+}
+
 /// The field's WGSL in group `group` (binding 0 the field, 1–4 the tables): the tables,
-/// `field_common.wgsl`, then `tail` — `"field"` (the terrain's `fs_terrain_forest`) or
-/// `"field_zfield"` (the trees before the field).
-pub(crate) fn field_wgsl(group: u32, tail: &str) -> String {
-    let tail = match tail {
-        "field" => include_str!("field.wgsl"),
-        "field_zfield" => include_str!("field_zfield.wgsl"),
-        other => unreachable!("no field shader {other}"),
+/// `field_common.wgsl`, then `user`'s own part.
+pub(crate) fn field_wgsl(group: u32, user: FieldUser) -> String {
+    let tail = match user {
+        FieldUser::Terrain => include_str!("field.wgsl"),
+        FieldUser::ZField => include_str!("field_zfield.wgsl"),
     };
     format!(
         "{}\n{}\n{}",
@@ -127,7 +125,7 @@ pub(crate) fn terrain_source() -> String {
     crate::pipeline::with_frame(&format!(
         "{}\n{}",
         include_str!("../../shaders/terrain.wgsl"),
-        field_wgsl(1, "field")
+        field_wgsl(1, FieldUser::Terrain)
     ))
 }
 

@@ -21,11 +21,12 @@ fn forest_radiance(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, ground: vec3<f32>, 
     let ndl = max(dot(n, l), 0.0);
     let t = forest_terms(v, l, n);
     let h = field_handover(s);
-    let sun_g = ground * frame.sun_color.rgb * ndl * vis;
+    let sun_open = ground * frame.sun_color.rgb * ndl;
+    let sun_g = sun_open * vis;
     let sky_g = ground * sky_light(n);
     let lit_share = select(1.0, t.seen_lit / t.seen, t.seen > 1e-5);
     let vis_mean = field_sun_visibility(vis, s);
-    let sun_mean = ground * frame.sun_color.rgb * ndl * vis_mean * lit_share;
+    let sun_mean = sun_open * vis_mean * lit_share;
     let ig = mix(sun_g, sun_mean, h.x);
     let jg = mix(sky_g, sky_g * t.ground_sky, h.x);
     let trees = forest_trees(t, field.tree_albedo.rgb, v, l, vis_mean);

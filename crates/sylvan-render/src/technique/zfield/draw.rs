@@ -260,10 +260,7 @@ impl ZField {
             bind,
             bytes: static_bytes,
         } = ZFieldBindings::upload(gpu, plants, baked, bake, draw, density)?;
-        let source = match field {
-            Some(_) => super::shader_source_with_field(),
-            None => super::shader_source(),
-        };
+        let source = super::shader_source_for(field.is_some());
         let module = sylvan_gpu::shader(gpu, "zfield", &source);
         let mut main_layouts = vec![&frame.main_layout, &bind_layout];
         main_layouts.extend(field.map(|f| &f.layout));
@@ -414,7 +411,7 @@ impl Technique for ZField {
         self.instances.reallocations
     }
 
-    /// With a field, the trees fade into it per pixel (`field_zfield.wgsl`).
+    /// With a field, each tree fades into it by its own distance (`field_zfield.wgsl`).
     fn fades_to_field(&self) -> bool {
         self.field.is_some()
     }

@@ -360,31 +360,33 @@ pub const ENTRY: Entry = Entry {
     shaders: || {
         vec![
             ("zfield", shader_source()),
-            ("zfield_field", shader_source_with_field()),
+            ("zfield_field", shader_source_for(true)),
         ]
     },
 };
 
-/// The WGSL of `zfield` as compiled: the frame's group 0, `bindings.wgsl` (group 1), the
-/// direction grid's lookup, `zfield.wgsl`, and its own lighting everywhere (`field_none.wgsl`).
+/// The WGSL of `zfield` as compiled alone: [`shader_source_for`] without a field.
 pub(crate) fn shader_source() -> String {
-    crate::pipeline::with_frame(&format!(
-        "{}\n{}\n{}\n{}",
-        include_str!("bindings.wgsl"),
-        crate::directions::HEMI_GRID_WGSL,
-        include_str!("zfield.wgsl"),
-        include_str!("field_none.wgsl")
-    ))
+    shader_source_for(false)
 }
 
-/// The WGSL of `zfield` before a forest field: as [`shader_source`], with the field's tables
-/// and terms in group 2 and `field_zfield.wgsl` in place of `field_none.wgsl` (BN12 §7).
-pub(crate) fn shader_source_with_field() -> String {
+/// The WGSL of `zfield`: the frame's group 0, `bindings.wgsl` (group 1), the direction grid's
+/// lookup, `zfield.wgsl`, then — before a forest field — the field's tables and terms in group
+/// 2 and `field_zfield.wgsl` (BN12 §7), or else its own lighting everywhere
+/// (`field_none.wgsl`).
+pub(crate) fn shader_source_for(field: bool) -> String {
+    let tail = match field {
+        true => crate::technique::shadermap::field::field_wgsl(
+            2,
+            crate::technique::shadermap::field::FieldUser::ZField,
+        ),
+        false => include_str!("field_none.wgsl").to_string(),
+    };
     crate::pipeline::with_frame(&format!(
         "{}\n{}\n{}\n{}",
         include_str!("bindings.wgsl"),
         crate::directions::HEMI_GRID_WGSL,
         include_str!("zfield.wgsl"),
-        crate::technique::shadermap::field::field_wgsl(2, "field_zfield")
+        tail
     ))
 }
