@@ -345,15 +345,38 @@ pub enum DebugView {
     Technique,
     /// Terrain and trees tinted by the shadow cascade covering them (red, green, blue, yellow).
     Cascades,
+    /// Coverage: every tree white at its opacity, the bare terrain black, and the forest field
+    /// (`shadermap`) grey at the share of its pixel that trees cover (1 − Gd; beside drawn
+    /// trees, the share it takes from them as they fade). The mean radiance of a crop
+    /// (`render --measure`) is then the fraction of it covered by trees, whatever drew them.
+    Coverage,
 }
 
 impl DebugView {
     /// Every debug view with its label, in the order of the viewer's panel.
-    pub const ALL: [(&'static str, DebugView); 3] = [
+    pub const ALL: [(&'static str, DebugView); 4] = [
         ("none", DebugView::None),
         ("technique", DebugView::Technique),
         ("shadow cascades", DebugView::Cascades),
+        ("coverage", DebugView::Coverage),
     ];
+
+    /// The view named `name` (a label of [`DebugView::ALL`], or `cascades`), or a one-line
+    /// error listing the names.
+    pub fn parse(name: &str) -> Result<DebugView, String> {
+        let wanted = if name == "cascades" {
+            "shadow cascades"
+        } else {
+            name
+        };
+        Self::ALL
+            .iter()
+            .find(|(n, _)| *n == wanted)
+            .map(|(_, d)| *d)
+            .ok_or_else(|| {
+                format!("'{name}' is not a debug view — use none, technique, cascades or coverage")
+            })
+    }
 
     /// The value the shaders read from `shadow_params.z`.
     pub fn code(self) -> f32 {
@@ -361,6 +384,7 @@ impl DebugView {
             DebugView::None => 0.0,
             DebugView::Technique => 1.0,
             DebugView::Cascades => 2.0,
+            DebugView::Coverage => 3.0,
         }
     }
 }

@@ -160,9 +160,14 @@ fn presence_alpha(alpha: f32, presence: f32) -> f32 {
 }
 
 // Debug views (`frame.shadow_params.z`, `DebugView` in Rust): 0 none, 1 colour by technique,
-// 2 colour by shadow cascade.
+// 2 colour by shadow cascade, 3 coverage (trees white, terrain black).
 const DEBUG_TECHNIQUE: u32 = 1u;
 const DEBUG_CASCADES: u32 = 2u;
+const DEBUG_COVERAGE: u32 = 3u;
+
+fn debug_mode() -> u32 {
+    return u32(frame.shadow_params.z + 0.5);
+}
 
 // `technique_color(id)` and the `TECHNIQUE_<NAME>` ids are generated from the technique
 // registry and prepended to this file (`registry::wgsl_prelude`).
@@ -205,7 +210,7 @@ fn debug_tint(color: vec3<f32>, world: vec3<f32>, technique: i32) -> vec3<f32> {
 }
 
 fn debug_colour(color: vec3<f32>, world: vec3<f32>, technique: i32) -> vec3<f32> {
-    let mode = u32(frame.shadow_params.z + 0.5);
+    let mode = debug_mode();
     let luma = dot(color, vec3<f32>(0.2126, 0.7152, 0.0722));
     if (mode == DEBUG_TECHNIQUE) {
         if (technique < 0) {
@@ -220,13 +225,16 @@ fn debug_colour(color: vec3<f32>, world: vec3<f32>, technique: i32) -> vec3<f32>
         }
         return mix(color, cascade_color(c) * (0.2 + 1.5 * luma), 0.6);
     }
+    if (mode == DEBUG_COVERAGE) {
+        return vec3<f32>(select(1.0, 0.0, technique < 0));
+    }
     return color;
 }
 
 // `debug_tint` for a level-of-detail technique: in the "technique" view, level 0 (coarsest)
 // is the technique's colour and each finer level is paler.
 fn debug_tint_lod(color: vec3<f32>, world: vec3<f32>, technique: i32, level: u32) -> vec3<f32> {
-    let mode = u32(frame.shadow_params.z + 0.5);
+    let mode = debug_mode();
     if (mode == DEBUG_TECHNIQUE) {
         let luma = dot(color, vec3<f32>(0.2126, 0.7152, 0.0722));
         let c = mix(technique_color(technique), vec3<f32>(1.0), min(f32(level) * 0.3, 0.75));

@@ -5,6 +5,7 @@ use super::common::{ViewArgs, load_path, path_time, prepare};
 use super::stats::Report;
 use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};
+use sylvan_render::DebugView;
 
 /// Flags of `sylvan render`.
 #[derive(clap::Args, Debug)]
@@ -28,6 +29,11 @@ pub struct RenderArgs {
     /// this rectangle of output pixels to the stats (`radiance_mean`; needs --stats).
     #[arg(long, value_name = "X,Y,W,H", value_parser = parse_rect)]
     pub measure: Option<[u32; 4]>,
+    /// Debug view: none, technique (trees tinted by the technique that drew them), cascades,
+    /// coverage (trees white at their opacity, terrain black, the forest field at its trees'
+    /// share: with --measure, the fraction of the rectangle covered by trees).
+    #[arg(long, default_value = "none", value_parser = DebugView::parse)]
+    pub debug: DebugView,
 }
 
 fn parse_rect(s: &str) -> Result<[u32; 4], String> {
@@ -110,7 +116,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
         Some(p) => Some(load_path(p, args.view.camera.as_deref())?),
         None => None,
     };
-    let r = args.view.resolve()?;
+    let mut r = args.view.resolve()?;
+    r.options.debug = args.debug;
     let (gpu, mut renderer, bake_ms) = prepare(&r)?;
     let mut stats = None;
     for i in 0..args.frames {

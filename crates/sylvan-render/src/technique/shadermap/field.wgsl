@@ -30,9 +30,15 @@ fn forest_radiance(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, ground: vec3<f32>, 
     let ig = mix(sun_g, sun_mean, h.x);
     let jg = mix(sky_g, sky_g * t.ground_sky, h.x);
     let trees = forest_trees(t, field.tree_albedo.rgb, v, l, vis_mean);
-    let c = 1.0 - t.seen;
-    let mu = c * h.y / max(1.0 - c * (1.0 - h.y), 1e-5);
+    let mu = field_tree_share(t, h.y);
     return (1.0 - mu) * (ig + jg) + mu * trees;
+}
+
+// Eq. 27's μ, mean-preserving: the share of a pixel the field gives to trees when the drawn
+// trees over it have faded by `w` (`forest_radiance`).
+fn field_tree_share(t: ForestTerms, w: f32) -> f32 {
+    let c = 1.0 - t.seen;
+    return c * w / max(1.0 - c * (1.0 - w), 1e-5);
 }
 
 @fragment
@@ -43,6 +49,10 @@ fn fs_terrain_forest(in: TerrainOut) -> @location(0) vec4<f32> {
     let v = normalize(frame.camera.xyz - in.world);
     let vis = select(sun_visibility(in.world, n * 0.15), 0.0, dot(n, l) <= 0.0);
     let s = distance(frame.camera.xyz, in.world);
+    if (debug_mode() == DEBUG_COVERAGE) {
+        let share = field_tree_share(forest_terms(v, l, n), field_handover(s).y);
+        return vec4<f32>(target_output(vec3<f32>(share)), 1.0);
+    }
     let lit = forest_radiance(n, v, l, ground, vis, s);
     return vec4<f32>(debug_tint(apply_fog(lit, in.world), in.world, TECHNIQUE_SHADERMAP), 1.0);
 }

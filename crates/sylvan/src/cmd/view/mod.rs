@@ -54,7 +54,7 @@ pub struct ViewerArgs {
     /// With --frames: write per-frame stats and GPU object counts as JSON.
     #[arg(long, value_name = "FILE.json")]
     pub stats: Option<PathBuf>,
-    /// Debug view: none, technique, cascades.
+    /// Debug view: none, technique, cascades, coverage.
     #[arg(long, default_value = "none")]
     pub debug_view: String,
     /// Scene resolution relative to the window (0.1–1; lower is faster on software adapters).
@@ -109,18 +109,8 @@ impl Config {
                 args.render_scale
             );
         }
-        let debug = DebugView::ALL
-            .iter()
-            .find(|(n, _)| {
-                *n == args.debug_view || (args.debug_view == "cascades" && *n == "shadow cascades")
-            })
-            .map(|(_, d)| *d)
-            .ok_or_else(|| {
-                anyhow::anyhow!(
-                    "--debug-view {}: unknown — use none, technique or cascades",
-                    args.debug_view
-                )
-            })?;
+        let debug =
+            DebugView::parse(&args.debug_view).map_err(|e| anyhow::anyhow!("--debug-view {e}"))?;
         if let Some(p) = &args.screenshot {
             check_output(p, "png", "--screenshot")?;
         }
