@@ -23,6 +23,12 @@ pub struct GpuFrame {
     pub cascade_far: [f32; 4],
     pub shadow_params: [f32; 4],
     pub target: [f32; 4],
+    /// The ground cover (`world::cover`): x tile side (m), y atlas cells per side, z BN12's a3,
+    /// w 1 when the ground's sky is occluded.
+    pub cover: [f32; 4],
+    /// x trees per m² where no cover tile is held; y mean tree height (m); z distance where
+    /// trees end (m); w the stored density's top (trees per m²).
+    pub cover_extra: [f32; 4],
 }
 
 /// A perspective view: where the eye is and what it sees.
@@ -211,8 +217,13 @@ pub struct FrameResources {
 
 impl FrameResources {
     /// Creates layouts, buffers and a `resolution²` shadow map per cascade, for main passes
-    /// into `target`.
-    pub fn new(gpu: &Gpu, resolution: u32, target: crate::pipeline::MainTarget) -> Self {
+    /// into `target`, binding the ground `cover`.
+    pub fn new(
+        gpu: &Gpu,
+        resolution: u32,
+        target: crate::pipeline::MainTarget,
+        cover: &crate::world::cover::GroundCover,
+    ) -> Self {
         let device = &gpu.device;
         let main_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("frame_main_layout"),
@@ -228,6 +239,23 @@ impl FrameResources {
                     2,
                     wgpu::ShaderStages::FRAGMENT,
                     wgpu::SamplerBindingType::Comparison,
+                ),
+                layout::texture(
+                    3,
+                    wgpu::ShaderStages::FRAGMENT,
+                    wgpu::TextureSampleType::Float { filterable: true },
+                    wgpu::TextureViewDimension::D2,
+                ),
+                layout::texture(
+                    4,
+                    wgpu::ShaderStages::FRAGMENT,
+                    wgpu::TextureSampleType::Uint,
+                    wgpu::TextureViewDimension::D2,
+                ),
+                layout::sampler(
+                    5,
+                    wgpu::ShaderStages::FRAGMENT,
+                    wgpu::SamplerBindingType::Filtering,
                 ),
             ],
         });
@@ -298,6 +326,18 @@ impl FrameResources {
                 wgpu::BindGroupEntry {
                     binding: 2,
                     resource: wgpu::BindingResource::Sampler(&sampler),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::TextureView(cover.view()),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: wgpu::BindingResource::TextureView(cover.tags_view()),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: wgpu::BindingResource::Sampler(cover.sampler()),
                 },
             ],
         });

@@ -10,9 +10,11 @@ use crate::technique::{
     BakeProgress, BandRange, BuildContext, DrawContext, DrawCounts, FrameInput, Technique, registry,
 };
 use crate::terrain::TerrainPass;
-use crate::world::{ListRequest, World, WorldView};
+use crate::world::cover::{CoverSettings, GroundCover};
+use crate::world::{ListRequest, Source, World, WorldView};
 use glam::{Mat4, Vec3};
 use std::collections::BTreeMap;
+use std::sync::Arc;
 use sylvan_gpu::{FrameTimer, Gpu, OUTPUT_FORMAT, RenderTarget, Resolver, TimerKind};
 use sylvan_plant::Plant;
 use sylvan_scene::{Camera, PlantSource, Scene, Setting, Sun};
@@ -202,6 +204,8 @@ pub struct Renderer {
     instances: Instances,
     /// The tiled world, for a GPU-driven technique (its trees never reach `instances`).
     world: Option<World>,
+    /// The ground cover (BN12's coverage and density, for the ground's and trees' sky).
+    cover: GroundCover,
     /// What the technique asks of the GPU cull (one per band of a chain).
     requests: Vec<ListRequest>,
     /// Trees in the whole world (expected count for a seeded forest).
@@ -315,7 +319,30 @@ impl Renderer {
                 ((MAX_SHADOW_BYTES / (CASCADES as u64 * 4)) as f64).sqrt() as u32 & !255
             )));
         }
-        let frame = FrameResources::new(gpu, res, caller_target.unwrap_or(MainTarget::OWN));
+        let bounds: Vec<SpeciesBounds> = plants
+            .iter()
+            .map(|p| SpeciesBounds {
+                min: Vec3::from(p.bbox_min),
+                max: Vec3::from(p.bbox_max),
+            })
+            .collect();
+        let source = Arc::new(Source::new(
+            scene.terrain.clone(),
+            scene.seeded.clone(),
+            &scene.trees,
+            bounds.clone(),
+            scene.world.tile_m,
+        ));
+        let t = &scene.terrain;
+        let (lo, hi) = t.min_max();
+        let far = (t.size[0].hypot(t.size[1]) + (hi - lo) + 500.0).max(1000.0);
+        let cover = GroundCover::new(
+            gpu,
+            source.clone(),
+            t.size,
+            &cover_settings(scene, &source, far),
+        )?;
+        let frame = FrameResources::new(gpu, res, caller_target.unwrap_or(MainTarget::OWN), &cover);
         let resolver = Resolver::new(gpu);
         let targets = match caller_target {
             Some(_) => None,
@@ -327,13 +354,6 @@ impl Renderer {
                 factor,
             )?),
         };
-        let bounds: Vec<SpeciesBounds> = plants
-            .iter()
-            .map(|p| SpeciesBounds {
-                min: Vec3::from(p.bbox_min),
-                max: Vec3::from(p.bbox_max),
-            })
-            .collect();
         let entry = registry::find(&options.technique)?;
         // A GPU-driven technique draws the world tile by tile; any other gets every tree now.
         let gpu_driven = !options.cpu_driven
@@ -382,18 +402,13 @@ impl Renderer {
             progress,
         })?;
         let (technique, bake_reports) = (built.technique, built.reports);
-        let t = &scene.terrain;
-        let (lo, hi) = t
-            .heights
-            .iter()
-            .fold((f32::MAX, f32::MIN), |(a, b), &h| (a.min(h), b.max(h)));
         let tallest = trees.iter().chain(&scene.trees).map(|t| t.height).fold(
             scene.seeded.as_ref().map_or(0.0, |f| f.tallest_m()),
             f32::max,
         );
         let requests = technique.list_requests();
         let world = match gpu_driven {
-            true => Some(World::new(gpu, scene, &bounds, &requests)?),
+            true => Some(World::new(gpu, scene, source, &requests)?),
             false => None,
         };
         let renderer = Self {
@@ -412,7 +427,8 @@ impl Renderer {
             shadows_now: false,
             scene_sky: scene.sky,
             fog_half: scene.fog.half_distance_m,
-            far: (t.size[0].hypot(t.size[1]) + (hi - lo) + 500.0).max(1000.0),
+            far,
+            cover,
             caster_reach: (hi - lo) + tallest + 50.0,
             options: options.clone(),
         };
@@ -573,6 +589,7 @@ impl Renderer {
         if let Some(w) = &world_stats {
             technique_stats.insert("world".to_string(), w.named());
         }
+        technique_stats.insert("ground_cover".to_string(), self.cover.named());
         Ok(FrameStats {
             technique_stats,
             frame_ms,
@@ -599,6 +616,7 @@ impl Renderer {
     pub fn gpu_bytes(&self) -> u64 {
         self.technique.bytes()
             + self.terrain.bytes()
+            + self.cover.bytes()
             + self.frame.bytes()
             + self
                 .targets
@@ -631,6 +649,8 @@ impl Renderer {
         );
         let frustum = Frustum::from_matrix(fv.view_proj);
         let cpu_start = std::time::Instant::now();
+        let cover_range = self.far.min(view.far);
+        self.cover.prepare(gpu, view.eye, cover_range, &frustum);
         let windows = match self.world {
             Some(_) => self.technique.list_windows(fv.pixels_per_metre),
             None => None,
@@ -836,6 +856,8 @@ impl Renderer {
                 0.0,
                 0.0,
             ],
+            cover: self.cover.uniforms()[0],
+            cover_extra: self.cover.uniforms()[1],
         }
     }
 }
@@ -1022,3 +1044,41 @@ const _: fn() = || {
     fn send<T: Send>() {}
     send::<Renderer>();
 };
+
+/// The ground cover's settings for `scene` (see [`GroundCover`]): the scene's `[sky]`
+/// switches, its trees' mean height and density, where trees end and their widest crown.
+fn cover_settings(scene: &Scene, source: &Source, far: f32) -> CoverSettings {
+    let area = (scene.terrain.size[0] * scene.terrain.size[1]).max(1.0);
+    let mean_height_m = if scene.trees.is_empty() {
+        let n = scene.species.len().max(1) as f32;
+        scene
+            .species
+            .iter()
+            .map(|s| 0.5 * (s.height_m[0] + s.height_m[1]))
+            .sum::<f32>()
+            / n
+    } else {
+        scene.trees.iter().map(|t| t.height).sum::<f32>() / scene.trees.len() as f32
+    };
+    let tallest = scene.trees.iter().map(|t| t.height).fold(
+        scene
+            .species
+            .iter()
+            .map(|s| s.height_m[1])
+            .fold(0.0, f32::max),
+        f32::max,
+    );
+    let crown_m = crate::world::cover::crown_disks(source)
+        .iter()
+        .map(|(o, r)| (o.length() + r) * tallest)
+        .fold(0.0, f32::max);
+    CoverSettings {
+        contrast: scene.sky.ground_contrast,
+        enabled: scene.sky.ground_occlusion,
+        mean_height_m,
+        fallback_density: (scene.estimated_trees() / area as f64) as f32,
+        trees_end_m: scene.world.tree_distance_m,
+        reach_m: scene.world.tree_distance_m.min(far),
+        crown_m,
+    }
+}

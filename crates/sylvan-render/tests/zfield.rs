@@ -697,3 +697,82 @@ fn z_fields_intersect_each_other() {
         "zfield {rz} vs geometry {rg}"
     );
 }
+
+/// BN12 eq. 10–12: lit by the sky alone (the sun below the horizon), the ground under a crown
+/// is darker than open ground beside it (the ground cover's Γ under the crown, Δ < 1); without
+/// the ground's occlusion (`[sky] ground_occlusion = false`) both see the same sky.
+#[test]
+fn sky_light_leaves_the_ground_under_trees_darker_than_open_ground() {
+    let sun = common::sun(180.0, -5.0);
+    let mut scene = one_tree_scene(Vec3::new(0.0, 2.5, -20.0), sun, &[(AT, 0.0)], flat());
+    scene.camera.look_at = AT + Vec3::new(0.0, 0.5, 0.0);
+    let under = AT + Vec3::new(0.0, 0.0, -1.6);
+    let open = AT + Vec3::new(7.0, 0.0, -1.6);
+    let mut ratios = Vec::new();
+    for occlusion in [true, false] {
+        scene.sky.ground_occlusion = occlusion;
+        let img = render(&scene, "zfield", 4, &["zfield.order=9"]);
+        save(&format!("ground-sky-occlusion-{occlusion}"), &img);
+        let cam = &scene.camera;
+        let (u, o) = (
+            common::luma_at(&img, cam, under, 2),
+            common::luma_at(&img, cam, open, 2),
+        );
+        eprintln!("sky-lit ground (occlusion {occlusion}): under the crown {u:.1}, open {o:.1}");
+        ratios.push(u / o.max(1e-3));
+    }
+    assert!(
+        ratios[0] < 0.75,
+        "the ground under the crown sees less sky: under / open {}",
+        ratios[0]
+    );
+    assert!(
+        (ratios[1] - 1.0).abs() < 0.05,
+        "without the ground cover the ground is evenly lit: under / open {}",
+        ratios[1]
+    );
+}
+
+/// BN12 eq. 9 with a density map (the ground cover's Λ_h at the trunk): lit by the sky alone,
+/// a tree at the front of a dense stand is dimmer, and a lone tree brighter, than with one
+/// density for the whole scene (`density_per_ha`): the stand's hole is deeper. Same pixels,
+/// same geometry: only eq. 9's density differs between the two renders.
+#[test]
+fn sky_light_follows_the_local_density_of_trees() {
+    let sun = common::sun(180.0, -5.0);
+    let lone = AT + Vec3::new(-14.0, 0.0, 0.0);
+    let front = AT + Vec3::new(14.0, 0.0, 0.0);
+    let mut trees = vec![(lone, 0.0), (front, 0.0)];
+    for i in -2..=2 {
+        for j in 1..=5 {
+            trees.push((
+                front + Vec3::new(i as f32 * 2.5, 0.0, j as f32 * 2.5),
+                0.4 * j as f32,
+            ));
+        }
+    }
+    let mut scene = one_tree_scene(Vec3::new(0.0, 6.0, -60.0), sun, &trees, flat());
+    scene.camera.look_at = AT + Vec3::new(0.0, 6.0, 0.0);
+    scene.camera.fov_deg = 30.0;
+    let mut lumas = Vec::new();
+    for extra in [&[][..], &["zfield.density_per_ha=200"][..]] {
+        let mut settings = vec!["zfield.order=9", "zfield.sun_scale=0"];
+        settings.extend_from_slice(extra);
+        let img = render(&scene, "zfield", 4, &settings);
+        save(&format!("stand-sky-{}", extra.len()), &img);
+        let cam = &scene.camera;
+        let at = |p: Vec3| common::luma_at(&img, cam, p + Vec3::new(0.0, 5.2, -2.0), 2);
+        let (l, f) = (at(lone), at(front));
+        eprintln!("sky-lit crowns ({extra:?}): lone tree {l:.1}, front of the stand {f:.1}");
+        lumas.push((l, f));
+    }
+    let [(lone_map, front_map), (lone_one, front_one)] = [lumas[0], lumas[1]];
+    assert!(
+        front_map < 0.97 * front_one,
+        "the stand's density deepens the hole: {front_map} with the map vs {front_one}"
+    );
+    assert!(
+        lone_map > lone_one,
+        "a lone tree's hole is shallower: {lone_map} with the map vs {lone_one}"
+    );
+}

@@ -27,6 +27,8 @@ impl Default for Sky {
             zenith: [0.30, 0.50, 0.95],
             horizon: [0.78, 0.85, 0.95],
             ground: [0.24, 0.23, 0.15],
+            ground_occlusion: true,
+            ground_contrast: 1.0,
         }
     }
 }

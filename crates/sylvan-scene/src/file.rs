@@ -71,6 +71,8 @@ struct RawSky {
     zenith: Option<Spanned<Nums<3>>>,
     horizon: Option<Spanned<Nums<3>>>,
     ground: Option<Spanned<Nums<3>>>,
+    ground_occlusion: Option<bool>,
+    ground_contrast: Option<Spanned<f32>>,
 }
 
 #[derive(Deserialize)]
@@ -630,10 +632,26 @@ fn build_sun(cx: &Ctx, raw: Option<RawSun>) -> Result<Sun, SceneError> {
 fn build_sky(cx: &Ctx, raw: Option<RawSky>) -> Result<Sky, SceneError> {
     let d = Sky::default();
     let Some(raw) = raw else { return Ok(d) };
+    let ground_contrast = match raw.ground_contrast {
+        None => d.ground_contrast,
+        Some(v) => {
+            let a = *v.get_ref();
+            if !(0.0..=4.0).contains(&a) {
+                return Err(cx.invalid(
+                    &v.span(),
+                    format!("ground_contrast = {a} is out of range"),
+                    "give 0 to 4 (BN12's a3; 1 is the default, 0 an evenly lit forest floor)",
+                ));
+            }
+            a
+        }
+    };
     Ok(Sky {
         zenith: colour(cx, raw.zenith, d.zenith, "zenith")?,
         horizon: colour(cx, raw.horizon, d.horizon, "horizon")?,
         ground: colour(cx, raw.ground, d.ground, "ground")?,
+        ground_occlusion: raw.ground_occlusion.unwrap_or(d.ground_occlusion),
+        ground_contrast,
     })
 }
 

@@ -132,6 +132,12 @@ pub struct Sky {
     pub horizon: [f32; 3],
     /// Light bounced from the ground (lower hemisphere of the ambient term).
     pub ground: [f32; 3],
+    /// The ground's sky is occluded by the trees around it (BN12 eq. 10–12): darker in a
+    /// forest, and darker under crowns than between them.
+    pub ground_occlusion: bool,
+    /// BN12's contrast factor a3 (eq. 10): how much darker the ground is under crowns than
+    /// between them, 0 to 4.
+    pub ground_contrast: f32,
 }
 
 /// Exponential distance fog.

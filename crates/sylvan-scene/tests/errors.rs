@@ -221,4 +221,8 @@ fn out_of_range_values() {
     assert_at(&s, "2:25", "size_m");
     let (_, s) = load_err("size3", "[terrain]\nprocedural = { size_m = [1, 2, 3] }\n");
     assert!(s.contains("scene.toml:2:"), "{s}");
+    let (_, s) = load_err("contrast", "[sky]\nground_contrast = 9\n");
+    assert_at(&s, "2:19", "ground_contrast");
+    let (_, s) = load_err("occlusion", "[sky]\nground_occlusion = 1\n");
+    assert!(s.contains("scene.toml:2:"), "{s}");
 }

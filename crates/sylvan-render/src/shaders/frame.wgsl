@@ -24,11 +24,21 @@ struct Frame {
     // The main pass's target (`MainTarget`): x: colour output (0 radiance, 1 × exposure,
     // 2 exposure + tone curve); y: depth of the far plane (0 reversed-Z, 1 standard).
     main_target: vec4<f32>,
+    // The ground cover (`world/cover.rs`): x tile side (m); y atlas cells per side; z BN12's
+    // a3 (eq. 10); w 1 when the ground's sky is occluded.
+    cover: vec4<f32>,
+    // x trees per m² where no cover tile is held; y mean tree height (m); z distance where
+    // trees end (m); w the stored density's top (trees per m²).
+    cover_extra: vec4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(1) var shadow_map: texture_depth_2d_array;
 @group(0) @binding(2) var shadow_sampler: sampler_comparison;
+// Main passes only (the shadow passes' group 0 holds the uniforms alone).
+@group(0) @binding(3) var cover_atlas: texture_2d<f32>;
+@group(0) @binding(4) var cover_tags: texture_2d<u32>;
+@group(0) @binding(5) var cover_sampler: sampler;
 
 // The shadow cascade covering `world` (by view distance), or CASCADES beyond the last one.
 fn cascade_index(world: vec3<f32>) -> u32 {
@@ -75,6 +85,56 @@ fn sky_light(n: vec3<f32>) -> vec3<f32> {
     let up = n.y * 0.5 + 0.5;
     let sky = mix(frame.sky_horizon.rgb, frame.sky_zenith.rgb, 0.5);
     return mix(frame.sky_ground.rgb, sky, up);
+}
+
+// The ground cover at world (x, z) (`world/cover.rs`): x Γ, the share covered by crowns seen
+// from above; y Γ̄, its local mean; z Λ_h, trees per m² around; w the terrain's n·u_z. Where no
+// tile is held: Γ = Γ̄ = 0, the scene's mean density, w = -1 (unknown). Main passes only.
+fn ground_cover(xz: vec2<f32>) -> vec4<f32> {
+    let fallback = vec4<f32>(0.0, 0.0, frame.cover_extra.x, -1.0);
+    if (frame.cover.w < 0.5) {
+        return fallback;
+    }
+    let n = i32(frame.cover.y);
+    let tile = vec2<i32>(floor(xz / frame.cover.x));
+    let cell = ((tile % n) + vec2<i32>(n)) % n;
+    let tag = textureLoad(cover_tags, cell, 0).r;
+    if (any(tile < vec2<i32>(0)) || tag != u32(tile.x) + u32(tile.y) * 65536u + 1u) {
+        return fallback;
+    }
+    let t = textureSampleLevel(cover_atlas, cover_sampler, xz / (frame.cover.x * frame.cover.y), 0.0);
+    return vec4<f32>(t.r, t.g, t.b * t.b * frame.cover_extra.w, t.a);
+}
+
+// Fades the ground cover's effect out where trees end (`[world] tree_distance_m`, over its
+// last 10 %, as the trees' presence does).
+fn ground_cover_weight(world: vec3<f32>) -> f32 {
+    let end = frame.cover_extra.z;
+    return 1.0 - smoothstep(end * 0.9, end, distance(world, frame.camera.xyz));
+}
+
+// BN12 eq. 10: Δ = 1 − a3 (Γ − Γ̄), darker under crowns and brighter between them, averaging
+// to 1 (Γ̄ is Γ's local mean); 1 where the cover is off or trees end.
+fn ground_contrast(world: vec3<f32>) -> f32 {
+    let c = ground_cover(world.xz);
+    let delta = max(1.0 - frame.cover.z * (c.x - c.y), 0.0);
+    return mix(1.0, delta, ground_cover_weight(world));
+}
+
+// The share of its open sky the ground at `world` sees through the trees (BN12 eq. 12 without
+// the slope, which `sky_light` has): δ_g Δ, with δ_g the ambient occlusion at the bottom of
+// eq. 9's cylindrical hole as deep as the mean tree (1 / (1 + H² Λ_h / 4)) for the local
+// density — BN12 takes δ_g from its table 𝔻 (§6), which only a shader-map has; 1 where the
+// cover is off.
+fn ground_sky(world: vec3<f32>) -> f32 {
+    if (frame.cover.w < 0.5) {
+        return 1.0;
+    }
+    let c = ground_cover(world.xz);
+    let h = frame.cover_extra.y;
+    let delta_g = 1.0 / (1.0 + h * h * c.z * 0.25);
+    let occluded = clamp(delta_g * max(1.0 - frame.cover.z * (c.x - c.y), 0.0), 0.0, 1.0);
+    return mix(1.0, occluded, ground_cover_weight(world));
 }
 
 // Exponential distance fog towards the horizon colour, with a little sun in-scatter:

@@ -1,4 +1,5 @@
-// Terrain: a height grid lit by sun (Lambert, cascaded shadows) and hemispherical sky light.
+// Terrain: a height grid lit by sun (Lambert, cascaded shadows) and hemispherical sky light,
+// occluded by the trees around (BN12 eq. 10–12, `ground_sky`).
 
 struct TerrainIn {
     @location(0) position: vec3<f32>,
@@ -54,6 +55,6 @@ fn fs_terrain(in: TerrainOut) -> @location(0) vec4<f32> {
     let l = frame.sun_dir.xyz;
     let ndl = max(dot(n, l), 0.0);
     let vis = select(sun_visibility(in.world, n * 0.15), 0.0, ndl <= 0.0);
-    let light = frame.sun_color.rgb * ndl * vis + sky_light(n);
+    let light = frame.sun_color.rgb * ndl * vis + sky_light(n) * ground_sky(in.world);
     return vec4<f32>(debug_tint(apply_fog(albedo * light, in.world), in.world, -1), 1.0);
 }

@@ -17,6 +17,7 @@
 //!   listed at once — a frame needing more lists only what fits and counts the rest
 //!   (`trees_dropped`).
 
+pub mod cover;
 mod cull;
 mod produce;
 
@@ -24,11 +25,12 @@ pub use cull::{Culled, IndirectDraw, ListLayout, ListRequest, intersect_windows}
 
 use crate::RenderError;
 use crate::frame::{CASCADES, Frustum};
-use crate::instances::SpeciesBounds;
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
-use produce::{Producer, Source, TileTrees};
+pub(crate) use produce::Source;
+use produce::{Producer, TileTrees};
 use std::collections::HashMap;
+use std::sync::Arc;
 use sylvan_gpu::Gpu;
 use sylvan_scene::Scene;
 
@@ -161,7 +163,7 @@ pub struct World {
     settings: sylvan_scene::World,
     /// Tiles along X and Z.
     tiles: [i32; 2],
-    producer: Producer,
+    producer: Producer<TileTrees>,
     resident: HashMap<TileKey, Resident>,
     /// Produced, not inserted yet (see [`INSERT_BYTES_PER_FRAME`]).
     arrived: Vec<TileTrees>,
@@ -177,31 +179,22 @@ pub struct World {
 }
 
 impl World {
-    /// A world over `scene`'s terrain and trees; starts the tile workers. Nothing is produced
-    /// until the first frame.
-    pub fn new(
+    /// A world over `scene`'s terrain and trees (`source`, shared with the ground cover);
+    /// starts the tile workers. Nothing is produced until the first frame.
+    pub(crate) fn new(
         gpu: &Gpu,
         scene: &Scene,
-        bounds: &[SpeciesBounds],
+        source: Arc<Source>,
         requests: &[ListRequest],
     ) -> Result<Self, RenderError> {
+        let bounds = &source.bounds;
         let settings = scene.world;
         let tile_m = settings.tile_m;
         let tiles = scene
             .terrain
             .size
             .map(|s| ((s / tile_m).ceil() as i32).max(1));
-        let threads = std::thread::available_parallelism()
-            .map_or(1, |n| n.get())
-            .saturating_sub(1)
-            .clamp(1, 8);
-        let source = Source::new(
-            scene.terrain.clone(),
-            scene.seeded.clone(),
-            &scene.trees,
-            bounds.to_vec(),
-            tile_m,
-        );
+        let threads = worker_threads();
         let limits = gpu.device.limits();
         let binding = limits
             .max_storage_buffer_binding_size
@@ -233,7 +226,7 @@ impl World {
                 .min(max_pool_pages as u64 * PAGE as u64 * TREE_BYTES),
             settings,
             tiles,
-            producer: Producer::new(source, threads),
+            producer: Producer::new(Arc::new(move |k| source.produce(k)), threads, "tiles"),
             resident: HashMap::new(),
             arrived: Vec::new(),
             free_pages: (0..pool_pages).rev().collect(),
@@ -586,6 +579,14 @@ impl World {
         }
         evicted
     }
+}
+
+/// Tile workers per producer: the cores but one (the render thread's), 1 to 8.
+pub(crate) fn worker_threads() -> usize {
+    std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .saturating_sub(1)
+        .clamp(1, 8)
 }
 
 fn pool_buffer(gpu: &Gpu, pages: u32) -> wgpu::Buffer {

@@ -1,5 +1,6 @@
 //! Tile production on worker threads: a tile's trees from the scene's placed trees (binned by
-//! tile once, at start) and its seeded forest, turned into GPU records. Jobs are taken nearest
+//! tile once, at start) and its seeded forest, turned into GPU records — or anything else made
+//! per tile from the same trees (the ground cover, [`super::cover`]). Jobs are taken nearest
 //! first; the render thread can run jobs itself while it waits for a tile it must have.
 
 use super::{PoolTree, TileKey};
@@ -56,14 +57,35 @@ impl Source {
         }
     }
 
+    /// Every tree whose trunk base lies in `[min, max)` (world X, Z): the placed ones of the
+    /// tiles the rectangle touches, then the seeded ones (deterministic, whatever was asked
+    /// before).
+    pub fn trees_in(&self, min: Vec2, max: Vec2) -> Vec<TreeInstance> {
+        let lo = TileKey::of(min.x, min.y, self.tile_m);
+        let hi = TileKey::of(max.x, max.y, self.tile_m);
+        let mut trees = Vec::new();
+        for z in lo.z..=hi.z {
+            for x in lo.x..=hi.x {
+                let Some(bin) = self.placed.get(&TileKey { x, z }) else {
+                    continue;
+                };
+                trees.extend(bin.iter().filter(|t| {
+                    let p = Vec2::new(t.position.x, t.position.z);
+                    p.cmpge(min).all() && p.cmplt(max).all()
+                }));
+            }
+        }
+        if let Some(forest) = &self.seeded {
+            forest.produce(&self.terrain, min, max, &mut trees);
+        }
+        trees
+    }
+
     /// Produces one tile (deterministic: the same records in the same order every time).
     pub fn produce(&self, key: TileKey) -> TileTrees {
         let min = Vec2::new(key.x as f32, key.z as f32) * self.tile_m;
         let max = min + Vec2::splat(self.tile_m);
-        let mut trees: Vec<TreeInstance> = self.placed.get(&key).cloned().unwrap_or_default();
-        if let Some(forest) = &self.seeded {
-            forest.produce(&self.terrain, min, max, &mut trees);
-        }
+        let trees = self.trees_in(min, max);
         let mut out = TileTrees {
             key,
             trees: Vec::with_capacity(trees.len()),
@@ -106,34 +128,48 @@ struct Queue {
     stop: bool,
 }
 
+/// What a producer makes per tile.
+pub(crate) trait Produced: Send + 'static {
+    /// The tile it was made for.
+    fn key(&self) -> TileKey;
+}
+
+impl Produced for TileTrees {
+    fn key(&self) -> TileKey {
+        self.key
+    }
+}
+
+/// The job a producer runs per tile.
+pub(crate) type Job<T> = Arc<dyn Fn(TileKey) -> T + Send + Sync>;
+
 /// Worker threads producing tiles, nearest first.
-pub(crate) struct Producer {
-    source: Arc<Source>,
+pub(crate) struct Producer<T: Produced> {
+    job: Job<T>,
     queue: Arc<(Mutex<Queue>, Condvar)>,
-    done_tx: Sender<TileTrees>,
-    done: Receiver<TileTrees>,
+    done_tx: Sender<T>,
+    done: Receiver<T>,
     /// Requested and not yet received.
     pending: HashSet<TileKey>,
     workers: Vec<JoinHandle<()>>,
 }
 
-impl Producer {
-    /// Starts `threads` workers over `source` (0: the render thread produces everything).
-    pub fn new(source: Source, threads: usize) -> Self {
-        let source = Arc::new(source);
+impl<T: Produced> Producer<T> {
+    /// Starts `threads` workers running `job` (0: the render thread produces everything).
+    pub fn new(job: Job<T>, threads: usize, name: &str) -> Self {
         let queue = Arc::new((Mutex::new(Queue::default()), Condvar::new()));
         let (done_tx, done) = channel();
         let workers = (0..threads)
             .map(|i| {
-                let (source, queue, tx) = (source.clone(), queue.clone(), done_tx.clone());
+                let (job, queue, tx) = (job.clone(), queue.clone(), done_tx.clone());
                 std::thread::Builder::new()
-                    .name(format!("sylvan-tiles-{i}"))
-                    .spawn(move || worker(&source, &queue, &tx))
+                    .name(format!("sylvan-{name}-{i}"))
+                    .spawn(move || worker(&*job, &queue, &tx))
                     .expect("spawning a tile worker")
             })
             .collect();
         Self {
-            source,
+            job,
             queue,
             done_tx,
             done,
@@ -172,17 +208,17 @@ impl Producer {
     }
 
     /// Tiles finished since the last call, without waiting.
-    pub fn finished(&mut self) -> Vec<TileTrees> {
-        let out: Vec<TileTrees> = self.done.try_iter().collect();
+    pub fn finished(&mut self) -> Vec<T> {
+        let out: Vec<T> = self.done.try_iter().collect();
         for t in &out {
-            self.pending.remove(&t.key);
+            self.pending.remove(&t.key());
         }
         out
     }
 
     /// Waits until none of `keys` is pending, producing waiting jobs on this thread meanwhile;
     /// returns every tile finished meanwhile.
-    pub fn wait_for(&mut self, keys: &[TileKey]) -> Vec<TileTrees> {
+    pub fn wait_for(&mut self, keys: &[TileKey]) -> Vec<T> {
         let mut out = Vec::new();
         while keys.iter().any(|k| self.pending.contains(k)) {
             // Run a wanted job here if it has not started; else wait for a worker.
@@ -192,13 +228,13 @@ impl Producer {
                 at.map(|i| q.waiting.swap_remove(i).1)
             };
             let tile = match job {
-                Some(key) => self.source.produce(key),
+                Some(key) => (self.job)(key),
                 None => match self.done.recv() {
                     Ok(t) => t,
                     Err(_) => break,
                 },
             };
-            self.pending.remove(&tile.key);
+            self.pending.remove(&tile.key());
             out.push(tile);
         }
         out.extend(self.finished());
@@ -206,7 +242,7 @@ impl Producer {
     }
 }
 
-impl Drop for Producer {
+impl<T: Produced> Drop for Producer<T> {
     fn drop(&mut self) {
         self.queue.0.lock().expect("tile queue").stop = true;
         self.queue.1.notify_all();
@@ -217,7 +253,11 @@ impl Drop for Producer {
     }
 }
 
-fn worker(source: &Source, queue: &(Mutex<Queue>, Condvar), tx: &Sender<TileTrees>) {
+fn worker<T>(
+    job: &(dyn Fn(TileKey) -> T + Send + Sync),
+    queue: &(Mutex<Queue>, Condvar),
+    tx: &Sender<T>,
+) {
     loop {
         let key = {
             let mut q = queue.0.lock().expect("tile queue");
@@ -234,7 +274,7 @@ fn worker(source: &Source, queue: &(Mutex<Queue>, Condvar), tx: &Sender<TileTree
                 q = queue.1.wait(q).expect("tile queue");
             }
         };
-        if tx.send(source.produce(key)).is_err() {
+        if tx.send(job(key)).is_err() {
             return;
         }
     }

@@ -156,6 +156,7 @@ pub fn scene(terrain: Terrain, mut trees: Vec<TreeInstance>, camera: Camera, sun
             zenith: [0.3, 0.5, 0.95],
             horizon: [0.78, 0.85, 0.95],
             ground: [0.24, 0.23, 0.15],
+            ..Sky::default()
         },
         fog: Fog {
             half_distance_m: 0.0,

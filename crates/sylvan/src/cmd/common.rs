@@ -31,6 +31,10 @@ pub struct ViewArgs {
     /// Disable shadows.
     #[arg(long)]
     pub no_shadows: bool,
+    /// The ground sees the whole sky, trees or not (the scene's `[sky] ground_occlusion =
+    /// false`: no BN12 eq. 10–12 ground cover).
+    #[arg(long)]
+    pub no_ground_occlusion: bool,
     /// Shadow-map resolution per cascade.
     #[arg(long, default_value_t = 2048)]
     pub shadow_res: u32,
@@ -206,7 +210,10 @@ impl ViewArgs {
             ..Default::default()
         };
         options.factor()?;
-        let scene = load_scene(self.scene.as_deref())?;
+        let mut scene = load_scene(self.scene.as_deref())?;
+        if self.no_ground_occlusion {
+            scene.sky.ground_occlusion = false;
+        }
         check_scene_settings(&scene)?;
         let camera = match &self.camera {
             Some(c) => parse_camera(c, scene.camera)?,

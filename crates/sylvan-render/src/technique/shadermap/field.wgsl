@@ -11,13 +11,16 @@
 // `l`, albedo `ground`, the cascades' sun visibility `vis` (the relief's shadows, and the drawn
 // trees' where the cascades hold them: `field_sun_visibility`).
 //
-// Eq. 24–25: Ĩ_g = (1 − ν) I_g + ν Ī_g 𝔾/Gd, J̃_g = (1 − ν) J_g + ν J̄_g (J̄_g: the sky × 𝔻).
+// `contrast` is eq. 10's Δ at this pixel (`ground_contrast`).
+//
+// Eq. 24–25: Ĩ_g = (1 − ν) I_g + ν Ī_g 𝔾/Gd, J̃_g = (1 − ν) J_g + ν J̄_g, with eq. 12's
+// J_g = J̄_g Δ (δ_g from 𝔻, as eq. 18) and J̄_g the sky × 𝔻 (eq. 19).
 // Eq. 26–27, mean-preserving (a deviation): the trees drawn over this pixel cover c (1 − w)
 // of it on average (c = 1 − Gd, their opacity × (1 − w)), so the ground shows the trees' mean
 // with μ = c w / (1 − c (1 − w)), which makes the pixel's tree share exactly c at every w
 // (BN12's μ = c w dips to c − c²/4 at w = ½). At w = 1 this is eq. 13:
 // L = k_g Ī_g + (k_g + k_ḡ) J̄_g + (1 − k_g − k_ḡ)(𝕋 Ī_t + J̄_t).
-fn forest_radiance(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, ground: vec3<f32>, vis: f32, s: f32) -> vec3<f32> {
+fn forest_radiance(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, ground: vec3<f32>, vis: f32, s: f32, contrast: f32) -> vec3<f32> {
     let ndl = max(dot(n, l), 0.0);
     let t = forest_terms(v, l, n);
     let h = field_handover(s);
@@ -28,7 +31,7 @@ fn forest_radiance(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, ground: vec3<f32>, 
     let vis_mean = field_sun_visibility(vis, s);
     let sun_mean = sun_open * vis_mean * lit_share;
     let ig = mix(sun_g, sun_mean, h.x);
-    let jg = mix(sky_g, sky_g * t.ground_sky, h.x);
+    let jg = sky_g * t.ground_sky * mix(contrast, 1.0, h.x);
     let trees = forest_trees(t, field.tree_albedo.rgb, v, l, vis_mean);
     let mu = field_tree_share(t, h.y);
     return (1.0 - mu) * (ig + jg) + mu * trees;
@@ -53,6 +56,6 @@ fn fs_terrain_forest(in: TerrainOut) -> @location(0) vec4<f32> {
         let share = field_tree_share(forest_terms(v, l, n), field_handover(s).y);
         return vec4<f32>(target_output(vec3<f32>(share)), 1.0);
     }
-    let lit = forest_radiance(n, v, l, ground, vis, s);
+    let lit = forest_radiance(n, v, l, ground, vis, s, ground_contrast(in.world));
     return vec4<f32>(debug_tint(apply_fog(lit, in.world), in.world, TECHNIQUE_SHADERMAP), 1.0);
 }

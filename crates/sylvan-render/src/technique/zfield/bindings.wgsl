@@ -27,7 +27,8 @@ struct ZParams {
     sun: vec4<f32>,
     // x: sky scale; y: tree density Λ_h (trees/m²); z: normal weight; w: per-tree masks (1/0).
     sky: vec4<f32>,
-    // x: camera mip bias.
+    // x: camera mip bias; y: 1 when `density_per_ha` is set (it overrides the cover's
+    // density map).
     extra: vec4<f32>,
 };
 

@@ -176,7 +176,12 @@ impl ZFieldBindings {
                 draw.normal_weight,
                 if draw.per_tree_masks { 1.0 } else { 0.0 },
             ],
-            extra: [draw.lod_bias, 0.0, 0.0, 0.0],
+            extra: [
+                draw.lod_bias,
+                f32::from(u8::from(draw.density_per_ha > 0.0)),
+                0.0,
+                0.0,
+            ],
         };
         let device = &gpu.device;
         let storage = |label, contents: &[u8]| common::storage_buffer(gpu, label, contents);

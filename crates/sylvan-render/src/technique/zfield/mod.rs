@@ -22,8 +22,12 @@
 //!
 //! **Lighting**: sun (eq. 7–8) `ρ p exp(−τ‖p_l − p_v‖) F(v, l) V(p_l) L_sun` with the hotspot
 //! `F = 1 − a1 (1 − exp(−a2 acos(v·l)))`, `V` from the shared cascades at `p_l`; sky (eq. 9)
-//! `ρ L_sky δ_v / (1 + d² Λ_h / 4)`, `d` the depth of `p_v` below the tree's top, `Λ_h` the
-//! scene's tree density. Casters (§5): the quad facing the sun, step 5 only, at `z̄`.
+//! `ρ L_sky δ_v (1 + n·u_z)/2 / (1 + d² Λ_h / 4)`, `d` the depth of `p_v` below the tree's top,
+//! `Λ_h(x)` and the ground's `n·u_z` read from the ground cover at the trunk
+//! ([`crate::world::cover`]: the density map, from the trees placed). Ground (eq. 10–12): the
+//! terrain's sky is `δ_g Δ(x)` with eq. 10's `Δ = 1 − a3 (Γ − Γ̄)` from the same cover, for
+//! every technique (`frame.wgsl` `ground_sky`). Casters (§5): the quad facing the sun, step 5
+//! only, at `z̄`.
 //!
 //! **Coverage** (§8): with `blend = false`, opaque fragments kept where `α_v` (times the LOD
 //! presence, by optical depth) exceeds a threshold hashed from (pixel, tree): n uncorrelated
@@ -48,9 +52,14 @@
 //!   `normal_weight` (default 0.5) blends it towards the reference's leaf response at the
 //!   baked normal (Lambert + the geometry's diffuse transmission) — 0 is BN12's model
 //!   (measured 0.0648 with 0.5 vs 0.0678 with 0 on the default scene).
-//! - Sky: `L_sky` is the renderer's hemispherical sky seen by an upward normal; the slope term
-//!   `(1 + n·u_z)/2` is 1 (the terrain normal is not known in the tree shader); `Λ_h` is one
-//!   value per scene (placed trees over the terrain area, or `density_per_ha`), not a map.
+//! - Sky: `L_sky` is the renderer's hemispherical sky seen by an upward normal; `Λ_h(x)` is the
+//!   density of the trees placed around (16 m either side), not of the density maps they came
+//!   from; where the cover holds no tile, and with `density_per_ha` set, one value per scene
+//!   and flat ground.
+//! - Ground: `Δ` subtracts Γ's local mean Γ̄, not BN12's `Λ_h A`, so it averages to 1 whatever
+//!   the crowns' shapes; `δ_g` is eq. 9's hole at the depth of the mean tree for the local
+//!   density (BN12 takes it from the shader-map's 𝔻, which only a forest field has — with
+//!   one, the ground uses 𝔻); Γ is one disk per tree from the plant's box, at ~2 m texels.
 //! - Shadows store no opacity (the cascades are depth-only): casters are opaque where `α > ½`
 //!   (stochastic by `α` only while a tree fades) and the 3×3 PCF softens them (stochastic
 //!   casters measured 0.0648 vs 0.0631 on the default scene).
@@ -59,8 +68,6 @@
 //!   crowns (and trunks below them) are not lit as if behind solid foliage; off is BN12's
 //!   constant τ.
 //! - Camera mips are sampled `lod_bias` (−1) finer than the pixel footprint (0.0631 → 0.0615).
-//! - Ground (eq. 10–12) is not implemented: the terrain shader is shared and has no coverage
-//!   input yet; the ground gets the renderer's own sun (with the z-field shadows) and sky.
 //!
 //! **Parameters fitted** (draw keys, no re-bake) against `geometry --spp 16`: τ, `sun_scale`,
 //! `normal_weight`, `sky_scale` on one pine, prunus and chestnut at 160 px (τ 1–3 within 0.001
@@ -205,8 +212,9 @@ pub struct ZFieldDrawParams {
     pub a2: f32,
     /// Sky scale of eq. 9 (`ρ/2 ∫p` in the renderer's units).
     pub sky_scale: f32,
-    /// Tree density Λ_h of eq. 9 (trees per hectare); 0: the scene's placed trees over its
-    /// terrain area (400 when none are placed).
+    /// One tree density Λ_h for eq. 9 everywhere (trees per hectare); 0: the ground cover's
+    /// local density at each tree (the density map), and where it holds no tile the scene's
+    /// placed trees over its terrain area (400 when none are placed).
     pub density_per_ha: f32,
     /// Per-tree coverage masks (BN12 §8); false: every tree shares one mask (plain alpha to
     /// coverage: overlapping trees cover α, not 1 − (1 − α)ⁿ).
@@ -276,7 +284,7 @@ impl ParamTable for ZFieldDrawParams {
         ParamDoc {
             key: "density_per_ha",
             unit: "trees/ha",
-            doc: "tree density Λ_h of eq. 9's cylindrical hole (0: the scene's placed trees per terrain area)",
+            doc: "one tree density Λ_h for eq. 9's cylindrical hole everywhere (0: the ground cover's local density map)",
         },
         ParamDoc {
             key: "per_tree_masks",

@@ -324,11 +324,17 @@ fn z_fragment(in: ZOut, masked: bool) -> ZFragment {
     let phase = zp.sun.y * phase_shape(n, l);
     let vis = sun_visibility(world_l, vec3<f32>(0.0));
     let sun = frame.sun_color.rgb * albedo * phase * exp(-tau * path_m) * hotspot(v, l) * vis;
-    // Eq. 9: sky × δ_v × the cylindrical hole of the local density, d below the crown's top
-    // (the slope term (1 + n·u_z)/2 is 1: the terrain normal is not known here).
+    // Eq. 9: sky × δ_v × the cylindrical hole of the local density Λ_h(x), d below the
+    // crown's top, × the slope term (1 + n·u_z)/2 of the ground under the tree — both from the
+    // ground cover at the trunk (`ground_cover`); where it holds no tile (or with
+    // `density_per_ha` set) the scene's one density and flat ground.
     let top = instance_to_world(sp.bbox_max.xyz, in.base_scale, in.rot).y;
     let d = max(top - world.y, 0.0);
-    let hole = sky_hole(d, zp.sky.y);
+    let cover = ground_cover(in.base_scale.xz);
+    let known = cover.w >= 0.0;
+    let density = select(zp.sky.y, cover.z, known && zp.extra.y < 0.5);
+    let slope = select(1.0, 0.5 * (1.0 + cover.w), known);
+    let hole = sky_hole(d, density) * slope;
     let sky = albedo * sky_light(vec3<f32>(0.0, 1.0, 0.0)) * zp.sky.x * delta_v * hole;
     // Eq. 22–23: towards the forest field's means as the tree recedes (none without one).
     let light_v = field_tree_light(sun, sky, albedo, world, v, l, vis);

@@ -109,8 +109,8 @@ impl Config {
                 args.render_scale
             );
         }
-        let debug =
-            DebugView::parse(&args.debug_view).map_err(|e| anyhow::anyhow!("--debug-view {e}"))?;
+        let debug = DebugView::parse(&args.debug_view)
+            .map_err(|e| anyhow::anyhow!("--debug-view {}: {e}", args.debug_view))?;
         if let Some(p) = &args.screenshot {
             check_output(p, "png", "--screenshot")?;
         }
