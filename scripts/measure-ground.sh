@@ -63,7 +63,7 @@ if has cost; then
     local flags=("$@"); [[ $g == none ]] && flags+=(--no-ground-occlusion)
     local r
     r=$($S bench $scene --technique $t --frames 3 --json "${flags[@]}" 2>>"$OUT/log.txt")
-    echo "| ${scene:-built-in} | $t | $g | $(echo "$r" | j '"%.1f | %.2f | %.0f | %d | %.1f | %.2f" % (d["frame_ms"]["median"], d["cpu_ms"]["median"], d["startup_ms"], d["techniques"]["ground_cover"]["tiles_produced"], d["techniques"]["ground_cover"]["gpu_bytes"]/1e6, d["techniques"]["ground_cover"]["wait_ms"])') |"
+    echo "| ${scene:-built-in} | $t | $g | $(echo "$r" | j '"%.1f | %.2f | %.0f | %d | %.1f | %.2f" % (d["frame_ms"]["median"], d["cpu_ms"]["median"], d["startup_ms"], d["ground_cover"]["tiles_produced"], d["ground_cover"]["gpu_bytes"]/1e6, d["ground_cover"]["wait_ms"])') |"
   }
   for g in cover none; do
     for t in geometry zfield; do row "" $t $g --size 640x360; done

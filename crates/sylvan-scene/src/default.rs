@@ -28,7 +28,7 @@ impl Default for Sky {
             horizon: [0.78, 0.85, 0.95],
             ground: [0.24, 0.23, 0.15],
             ground_occlusion: true,
-            ground_contrast: 1.0,
+            ground_contrast: 0.5,
         }
     }
 }

@@ -640,7 +640,7 @@ fn build_sky(cx: &Ctx, raw: Option<RawSky>) -> Result<Sky, SceneError> {
                 return Err(cx.invalid(
                     &v.span(),
                     format!("ground_contrast = {a} is out of range"),
-                    "give 0 to 4 (BN12's a3; 1 is the default, 0 an evenly lit forest floor)",
+                    "give 0 to 4 (BN12's a3; 0.5 is the default, 0 an evenly lit forest floor)",
                 ));
             }
             a

@@ -136,7 +136,8 @@ pub struct Sky {
     /// forest, and darker under crowns than between them.
     pub ground_occlusion: bool,
     /// BN12's contrast factor a3 (eq. 10): how much darker the ground is under crowns than
-    /// between them, 0 to 4.
+    /// between them, 0 to 4 (default 0.5: under a lone crown Δ = 1 − a3, about the sky the
+    /// foot of a trunk sees past a crown as wide as it is high above the ground).
     pub ground_contrast: f32,
 }
 

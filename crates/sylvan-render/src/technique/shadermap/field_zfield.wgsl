@@ -3,10 +3,14 @@
 // s/s_max)), and their opacity fades by 1 − smoothstep(0.8, 1, s/s_max) while the ground
 // takes their share (eq. 26–27, `field.wgsl`).
 
-// Eq. 22–23: Ĩ_t = (1 − ν) I_t + ν Ī_t 𝕋, J̃_t = (1 − ν) J_t + ν J̄_t, with the tree's own albedo
-// (its mean over trees is the tables' ρ̄) and flat ground (the terrain's normal is not known
-// here). `vis` is the cascades' sun visibility at the tree point's light entry (the mean
-// terms take none nearer than s_max: `field_sun_visibility`).
+// Eq. 22–23: Ĩ_t = (1 − ν) I_t + ν Ī_t 𝕋, J̃_t = (1 − ν) J_t + ν J̄_t, the means with the
+// field's own albedo ρ̄, as BN12's Ī_t and J̄_t are, on flat ground (the terrain's normal is not
+// known here). With the pixel's own albedo instead, the band was 12 % (R), 3 % (G), 8 % (B)
+// darker than the field near s_max on scene E1 (M4): ρ̄ is the mean over all 181 baked views,
+// and what the crowns show at the band's grazing views is darker. `albedo` is unused (kept so
+// the signature matches `field_none.wgsl`'s). `vis` is the cascades' sun
+// visibility at the tree point's light entry (the mean terms take none nearer than s_max:
+// `field_sun_visibility`).
 fn field_tree_light(sun: vec3<f32>, sky: vec3<f32>, albedo: vec3<f32>, world: vec3<f32>, v: vec3<f32>, l: vec3<f32>, vis: f32) -> vec3<f32> {
     let s = distance(frame.camera.xyz, world);
     let nu = field_handover(s).x;
@@ -14,7 +18,7 @@ fn field_tree_light(sun: vec3<f32>, sky: vec3<f32>, albedo: vec3<f32>, world: ve
         return sun + sky;
     }
     let t = forest_terms(v, l, vec3<f32>(0.0, 1.0, 0.0));
-    return mix(sun + sky, forest_trees(t, albedo, v, l, field_sun_visibility(vis, s)), nu);
+    return mix(sun + sky, forest_trees(t, field.tree_albedo.rgb, v, l, field_sun_visibility(vis, s)), nu);
 }
 
 // The opacity factor of a tree whose trunk base is at `base` (§7's fade, by the tree's own
