@@ -116,9 +116,12 @@ fn ground_cover_weight(world: vec3<f32>) -> f32 {
 // BN12 eq. 10: Δ = 1 − a3 (Γ − Γ̄), darker under crowns and brighter between them, averaging
 // to 1 (Γ̄ is Γ's local mean); 1 where the cover is off or trees end.
 fn ground_contrast(world: vec3<f32>) -> f32 {
-    let c = ground_cover(world.xz);
-    let delta = max(1.0 - frame.cover.z * (c.x - c.y), 0.0);
-    return mix(1.0, delta, ground_cover_weight(world));
+    return mix(1.0, cover_delta(ground_cover(world.xz)), ground_cover_weight(world));
+}
+
+// Eq. 10's Δ of a `ground_cover` sample, unfaded.
+fn cover_delta(c: vec4<f32>) -> f32 {
+    return max(1.0 - frame.cover.z * (c.x - c.y), 0.0);
 }
 
 // The share of its open sky the ground at `world` sees through the trees (BN12 eq. 12 without
@@ -133,7 +136,7 @@ fn ground_sky(world: vec3<f32>) -> f32 {
     let c = ground_cover(world.xz);
     let h = frame.cover_extra.y;
     let delta_g = 1.0 / (1.0 + h * h * c.z * 0.25);
-    let occluded = clamp(delta_g * max(1.0 - frame.cover.z * (c.x - c.y), 0.0), 0.0, 1.0);
+    let occluded = clamp(delta_g * cover_delta(c), 0.0, 1.0);
     return mix(1.0, occluded, ground_cover_weight(world));
 }
 
