@@ -164,6 +164,126 @@ fn without_trees_the_field_is_the_plain_terrain() {
     );
 }
 
+#[test]
+fn the_field_is_where_the_trees_are() {
+    // The stand's west half only (x < 300 m), seen from above across the edge: the field takes
+    // the local density (`density.rs`), so over the bare half it equals the bare field
+    // (`density_scale = 0`, itself the plain terrain: the test above) and over the forest it
+    // does not. One density for the whole terrain fails the first, none fails the second.
+    let gpu = gpu();
+    let mut scene = stand();
+    scene.trees.retain(|t| t.position.x < 300.0);
+    scene.camera = Camera {
+        position: Vec3::new(300.0, 400.0, 200.0),
+        look_at: Vec3::new(300.0, 0.0, 300.0),
+        fov_deg: 60.0,
+    };
+    let plants = vec![common::test_tree()];
+    let frame = |extra: Option<&str>| {
+        let mut settings = settings();
+        settings.extend(extra.map(|a| Setting::from_arg(a).unwrap()));
+        let options = RenderOptions {
+            width: 48,
+            height: 48,
+            technique: "shadermap".into(),
+            settings,
+            shadows: false,
+            cache: CachePolicy::Off,
+            ..Default::default()
+        };
+        let mut r = Renderer::new(&gpu, &scene, &plants, &options).expect("renderer");
+        r.render(&gpu, &scene.camera, &scene.sun).expect("frame");
+        image::DynamicImage::ImageRgba8(r.read_image(&gpu).expect("readback")).into_rgb8()
+    };
+    let (forest, bare) = (frame(None), frame(Some("shadermap.density_scale=0")));
+    // Per column quarter (the image's x runs along the world's x, one way or the other): the
+    // largest and the mean per-channel difference.
+    let quarter = |q: u32| {
+        let (mut worst, mut sum, mut n) = (0i32, 0.0f64, 0.0f64);
+        for y in 8..40 {
+            for x in q * 12..q * 12 + 10 {
+                let (a, b) = (forest.get_pixel(x + 1, y), bare.get_pixel(x + 1, y));
+                for c in 0..3 {
+                    let d = (a[c] as i32 - b[c] as i32).abs();
+                    worst = worst.max(d);
+                    sum += d as f64;
+                    n += 1.0;
+                }
+            }
+        }
+        (worst, sum / n)
+    };
+    let (left, right) = (quarter(0), quarter(3));
+    eprintln!("forest vs bare field (largest, mean per channel): left {left:?}, right {right:?}");
+    let (bare_side, forest_side) = if left.1 < right.1 {
+        (left, right)
+    } else {
+        (right, left)
+    };
+    assert!(
+        bare_side.0 <= 1,
+        "where no tree grows the field must be bare: {bare_side:?}"
+    );
+    assert!(
+        forest_side.1 >= 8.0,
+        "where the trees grow the field must show them: {forest_side:?}"
+    );
+}
+
+#[test]
+fn the_field_covers_the_ground_as_the_local_species_do() {
+    // The stand with 10 m trees in its west half and 4 m ones (the same plant, species 1) in
+    // its east half, seen from above across the edge: the tables are measured for the 50/50
+    // mix, so with the summed density alone both halves would get the mix's coverage; with the
+    // local crown areas (`density.rs`) each half's field coverage follows the drawn trees'.
+    let gpu = gpu();
+    let mut scene = stand();
+    for t in &mut scene.trees {
+        if t.position.x >= 300.0 {
+            t.species = 1;
+            t.height = 4.0;
+        }
+    }
+    scene.species.push(scene.species[0].clone());
+    scene.camera = Camera {
+        position: Vec3::new(300.0, 500.0, 290.0),
+        look_at: Vec3::new(300.0, 0.0, 300.0),
+        fov_deg: 40.0,
+    };
+    let plants = vec![common::test_tree(), common::test_tree()];
+    let coverage = |technique: &str| {
+        let options = RenderOptions {
+            width: 64,
+            height: 64,
+            technique: technique.into(),
+            settings: settings(),
+            shadows: false,
+            cache: CachePolicy::Off,
+            debug: sylvan_render::DebugView::Coverage,
+            ..Default::default()
+        };
+        let mut r = Renderer::new(&gpu, &scene, &plants, &options).expect("renderer");
+        r.render(&gpu, &scene.camera, &scene.sun).expect("frame");
+        let side = |x: u32| r.radiance_mean(&gpu, [x, 8, 20, 48]).expect("radiance")[0];
+        (side(2), side(42))
+    };
+    let (drawn, field) = (coverage("zfield"), coverage("shadermap"));
+    eprintln!("covered share (left, right): drawn {drawn:?}, field {field:?}");
+    let (tall, short) = if drawn.0 > drawn.1 { (0, 1) } else { (1, 0) };
+    let pick = |v: (f32, f32), i: usize| if i == 0 { v.0 } else { v.1 };
+    assert!(
+        pick(drawn, tall) > 2.0 * pick(drawn, short),
+        "the tall trees must cover more: {drawn:?}"
+    );
+    for i in [tall, short] {
+        let (d, f) = (pick(drawn, i), pick(field, i));
+        assert!(
+            (f - d).abs() <= 0.2 * d + 0.01,
+            "side {i}: the field covers {f}, the trees {d}"
+        );
+    }
+}
+
 /// The mean linear radiance over the central half of a 64² frame of the stand (or of
 /// `trees`) drawn by the chain `zfield` to `s_max`, the field beyond, from `camera`, with
 /// `extra` settings. Bakes are shared through `cache`.

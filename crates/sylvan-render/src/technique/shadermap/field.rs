@@ -1,7 +1,8 @@
 //! The forest field on the terrain: the tables on the GPU and the field's parameters, bound as
 //! the terrain's group 1 (`field.wgsl`), and the `shadermap` technique that owns it.
 
-use super::gpu::{GpuTables, tables_wgsl};
+use super::density::DensityRaster;
+use super::gpu::{GpuTables, f32_to_f16, tables_wgsl};
 use super::tables::ShaderMapTables;
 use crate::RenderError;
 use crate::technique::zfield::ZFieldDrawParams;
@@ -14,6 +15,7 @@ use wgpu::util::DeviceExt;
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct GpuFieldParams {
     density: [f32; 4],
+    crowns: [f32; 4],
     tree_albedo: [f32; 4],
     light: [f32; 4],
     handover: [f32; 4],
@@ -33,10 +35,12 @@ pub struct Handover {
 }
 
 /// The field's GPU resources: group 1 of the terrain's forest pipeline, group 2 of the
-/// `zfield` trees before it.
+/// `zfield` trees before it. Binding 0 the field's parameters, 1–4 the tables, 5 the density
+/// raster (`Rgba16Float`: Λ_h and the crown areas, each over its peak; sampled with the
+/// tables' clamped linear sampler).
 #[derive(Clone)]
 pub struct ForestField {
-    /// The group's layout (binding 0 the field, 1–4 the tables).
+    /// The group's layout (binding 0 the field, 1–4 the tables, 5 the density).
     pub layout: wgpu::BindGroupLayout,
     /// The group.
     pub bind: wgpu::BindGroup,
@@ -45,31 +49,84 @@ pub struct ForestField {
 }
 
 impl ForestField {
-    /// Uploads `tables` for a forest of `density` trees per m², the trees lit as `zfield`
-    /// lights them (`draw`: `sun_scale`, `sky_scale`, `a1`, `a2`), taking over from the drawn
-    /// trees as `handover` says.
+    /// Uploads `tables` for a forest whose trees per m² are `density` × `scale`, the trees lit
+    /// as `zfield` lights them (`draw`: `sun_scale`, `sky_scale`, `a1`, `a2`), taking over from
+    /// the drawn trees as `handover` says.
     pub fn new(
         gpu: &Gpu,
         tables: &ShaderMapTables,
-        density: f32,
+        density: &DensityRaster,
+        scale: f32,
         draw: &ZFieldDrawParams,
         handover: Handover,
     ) -> Result<Self, RenderError> {
         let t = GpuTables::upload(gpu, tables)?;
         let device = &gpu.device;
-        // Binding 0 the field, 1–4 the tables.
-        let mut entries = vec![sylvan_gpu::layout::uniform(
-            0,
-            wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE,
-        )];
+        let all = wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE;
+        let mut entries = vec![sylvan_gpu::layout::uniform(0, all)];
         entries.extend(GpuTables::entries(1));
+        entries.push(sylvan_gpu::layout::texture(
+            5,
+            all,
+            wgpu::TextureSampleType::Float { filterable: true },
+            wgpu::TextureViewDimension::D2,
+        ));
+        let peaks = [0, 1, 2].map(|c| density.max(c));
+        let norm = peaks.map(|p| if p > 0.0 { 1.0 / p } else { 0.0 });
+        let bits: Vec<u16> = density
+            .texels
+            .iter()
+            .flat_map(|v| {
+                [
+                    f32_to_f16(v[0] * norm[0]),
+                    f32_to_f16(v[1] * norm[1]),
+                    f32_to_f16(v[2] * norm[2]),
+                    0,
+                ]
+            })
+            .collect();
+        let [w, h] = density.resolution;
+        let raster = device.create_texture_with_data(
+            &gpu.queue,
+            &wgpu::TextureDescriptor {
+                label: Some("shadermap_density"),
+                size: wgpu::Extent3d {
+                    width: w,
+                    height: h,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba16Float,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            },
+            wgpu::util::TextureDataOrder::LayerMajor,
+            bytemuck::cast_slice(&bits),
+        );
+        let raster_view = raster.create_view(&Default::default());
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("shadermap_field"),
             entries: &entries,
         });
         let [r, g, b] = tables.tree_albedo;
         let params = GpuFieldParams {
-            density: [density.max(0.0), 0.0, 0.0, 0.0],
+            density: [
+                (peaks[0] * scale).max(0.0),
+                1.0 / density.size_m[0],
+                1.0 / density.size_m[1],
+                0.0,
+            ],
+            crowns: {
+                let [a, s] = density.mean_areas();
+                [
+                    (peaks[1] * scale).max(0.0),
+                    (peaks[2] * scale).max(0.0),
+                    a,
+                    s,
+                ]
+            },
             tree_albedo: [r, g, b, 0.0],
             light: [draw.sun_scale, draw.sky_scale, draw.a1, draw.a2],
             handover: [
@@ -86,12 +143,13 @@ impl ForestField {
         });
         let mut resources = vec![buffer.as_entire_binding()];
         resources.extend(t.resources());
+        resources.push(wgpu::BindingResource::TextureView(&raster_view));
         let bind =
             crate::technique::common::bind_group(gpu, "shadermap_field", &layout, &resources);
         Ok(Self {
             layout,
             bind,
-            bytes: t.bytes + buffer.size(),
+            bytes: t.bytes + buffer.size() + bits.len() as u64 * 2,
         })
     }
 }

@@ -7,7 +7,8 @@
 // Group 1: binding 0 the field, bindings 1–4 the tables (`field_tables.wgsl`,
 // `field_common.wgsl`).
 
-// The ground's radiance at distance `s`, normal `n`, seen along `v` (towards the eye), sun
+// The ground's radiance at ground point `xz`, distance `s`, normal `n`, seen along `v`
+// (towards the eye), sun
 // `l`, albedo `ground`, the cascades' sun visibility `vis` (the relief's shadows, and the drawn
 // trees' where the cascades hold them: `field_sun_visibility`).
 //
@@ -20,9 +21,9 @@
 // with μ = c w / (1 − c (1 − w)), which makes the pixel's tree share exactly c at every w
 // (BN12's μ = c w dips to c − c²/4 at w = ½). At w = 1 this is eq. 13:
 // L = k_g Ī_g + (k_g + k_ḡ) J̄_g + (1 − k_g − k_ḡ)(𝕋 Ī_t + J̄_t).
-fn forest_radiance(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, ground: vec3<f32>, vis: f32, s: f32, contrast: f32) -> vec3<f32> {
+fn forest_radiance(xz: vec2<f32>, n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, ground: vec3<f32>, vis: f32, s: f32, contrast: f32) -> vec3<f32> {
     let ndl = max(dot(n, l), 0.0);
-    let t = forest_terms(v, l, n);
+    let t = forest_terms(xz, v, l, n);
     let h = field_handover(s);
     let sun_open = ground * frame.sun_color.rgb * ndl;
     let sun_g = sun_open * vis;
@@ -53,9 +54,9 @@ fn fs_terrain_forest(in: TerrainOut) -> @location(0) vec4<f32> {
     let vis = select(sun_visibility(in.world, n * 0.15), 0.0, dot(n, l) <= 0.0);
     let s = distance(frame.camera.xyz, in.world);
     if (debug_mode() == DEBUG_COVERAGE) {
-        let share = field_tree_share(forest_terms(v, l, n), field_handover(s).y);
+        let share = field_tree_share(forest_terms(in.world.xz, v, l, n), field_handover(s).y);
         return vec4<f32>(target_output(vec3<f32>(share)), 1.0);
     }
-    let lit = forest_radiance(n, v, l, ground, vis, s, ground_contrast(in.world));
+    let lit = forest_radiance(in.world.xz, n, v, l, ground, vis, s, ground_contrast(in.world));
     return vec4<f32>(debug_tint(apply_fog(lit, in.world), in.world, TECHNIQUE_SHADERMAP), 1.0);
 }

@@ -4,8 +4,12 @@
 // substituted.
 
 struct FieldParams {
-    // x: tree density Λ_h (trees per m²); yzw unused.
+    // x: the density raster's scale (its texels' r holds Λ_h / x, trees per m²); yz: 1 / the
+    // terrain's extent (m); w unused.
     density: vec4<f32>,
+    // x, y: the raster's g and b scales (Σ Λⁱ aⁱ, Σ Λⁱ sⁱ: crown areas per m² from the top
+    // and the side); z, w: the mix's mean crown areas ā, s̄ (m²; 0 without crowns).
+    crowns: vec4<f32>,
     // rgb: ρ̄, the trees' mean albedo (linear).
     tree_albedo: vec4<f32>,
     // x: `zfield.sun_scale`; y: `zfield.sky_scale`; z: a1; w: a2 (eq. 8).
@@ -17,6 +21,24 @@ struct FieldParams {
 };
 
 @group(FIELD) @binding(0) var<uniform> field: FieldParams;
+// Λ_h and the crown areas over the terrain (`density.rs`), normalised by `field.density.x`,
+// `field.crowns.xy`.
+@group(FIELD) @binding(5) var field_density_map: texture_2d<f32>;
+
+// The density the tables are looked up at, trees per m², at ground point `xz` for a view at
+// zenith `theta` of the transformed space: the density of the mix's trees whose crowns
+// project along it as much as the local trees' do (`density.rs`: Σ Λⁱ(aⁱ cos θ + sⁱ′ sin θ)
+// / (ā cos θ + s̄′ sin θ), side areas scaled by 2/h); Λ_h where the mix has no crowns.
+fn field_density(xz: vec2<f32>, theta: f32) -> f32 {
+    let t = textureSampleLevel(field_density_map, table_sampler, xz * field.density.yz, 0.0);
+    let c = cos(theta);
+    let s = sin(theta) * 2.0 / table_info.shape.x;
+    let mean = field.crowns.z * c + field.crowns.w * s;
+    if (mean <= 0.0) {
+        return field.density.x * t.r;
+    }
+    return (field.crowns.x * t.g * c + field.crowns.y * t.b * s) / mean;
+}
 
 // Eq. 2–5 in BN12's transformed space S = diag(1, 2/h, 1): view and light zeniths against the
 // transformed normal, the azimuth between them, and the density's slope factor.
@@ -51,7 +73,7 @@ fn field_hotspot(v: vec3<f32>, l: vec3<f32>) -> f32 {
     return 1.0 - field.light.z * (1.0 - exp(-field.light.w * angle));
 }
 
-// The tables at a point of normal `n` seen along `v` (towards the eye), sun `l`: `seen` = Gd
+// The tables at ground point `xz` of normal `n` seen along `v` (towards the eye), sun `l`: `seen` = Gd
 // (k_g + k_ḡ, eq. 15), `seen_lit` = 𝔾 (k_g, eq. 14), `trees_lit` = 𝕋 (k_t / (k_t + k_t̄),
 // eq. 16), `trees_sky` = 𝔼 (eq. 21), `ground_sky` = 𝔻 (eq. 19).
 struct ForestTerms {
@@ -62,11 +84,13 @@ struct ForestTerms {
     ground_sky: f32,
 };
 
-fn forest_terms(v: vec3<f32>, l: vec3<f32>, n: vec3<f32>) -> ForestTerms {
+fn forest_terms(xz: vec2<f32>, v: vec3<f32>, l: vec3<f32>, n: vec3<f32>) -> ForestTerms {
     let a = forest_angles(v, l, n);
-    let lambda = field.density.x * a.slope;
+    // The view's density for what is seen; the sky's (𝔻) at 45°, the cosine-weighted mean.
+    let lambda = field_density(xz, a.theta_v) * a.slope;
+    let lambda_sky = field_density(xz, 0.7853982) * a.slope;
     let gt = table_gt(a.theta_v, a.theta_l, a.phi, lambda);
-    let dec = table_dec(a.theta_v, lambda);
+    let dec = vec2<f32>(table_dec(a.theta_v, lambda).x, table_dec(a.theta_v, lambda_sky).y);
     var out: ForestTerms;
     out.seen = clamp(table_g_diag(a.theta_v, lambda), 0.0, 1.0);
     out.seen_lit = clamp(gt.x, 0.0, out.seen);

@@ -17,7 +17,7 @@ fn field_tree_light(sun: vec3<f32>, sky: vec3<f32>, albedo: vec3<f32>, world: ve
     if (nu <= 0.0) {
         return sun + sky;
     }
-    let t = forest_terms(v, l, vec3<f32>(0.0, 1.0, 0.0));
+    let t = forest_terms(world.xz, v, l, vec3<f32>(0.0, 1.0, 0.0));
     return mix(sun + sky, forest_trees(t, field.tree_albedo.rgb, v, l, field_sun_visibility(vis, s)), nu);
 }
 

@@ -30,8 +30,14 @@
 //! share as they fade (eq. 26–27). Other per-tree bands before a field fade by presence over
 //! the same window. `shadermap.handover=false` is a hard switch; `shadermap.nu` forces ν.
 //!
-//! **Not built yet**: density maps (one density for the whole scene: its trees over its area),
-//! ℂ and coverage tiles, seeds on the GPU, the per-tree 3-px rule (s_max is the band's start).
+//! **Density** ([`density`]): the field samples Λ_h(x) per pixel from a raster of the scene's
+//! density maps (summed over species) and its placed trees (binned per ≥ 25 m cell, tent
+//! smoothed), at most 512² texels whatever the terrain — a clearing is bare ground — with the
+//! local trees' crown areas, so the one mix table is looked up at the density of mix trees
+//! that covers the view as the local species do.
+//!
+//! **Not built yet**: ℂ and quadtree coverage tiles (the ground cover, `world::cover`, is one
+//! level, near the eye), seeds on the GPU, the per-tree 3-px rule (s_max is the band's start).
 //!
 //! **Deviations from BN12**, each stated:
 //! - The patch is drawn unscaled and each table direction `v′` of the transformed space
@@ -71,13 +77,16 @@
 //!   trees fading as (1 − w) plus the ground's share keep the tree fraction c at every w
 //!   (BN12's μ = c w dips to c − c²/4 at w = ½). The fade goes by each tree's trunk distance
 //!   (a tree fades as one), the ground's by the pixel's.
-//! - Eq. 22's tree term keeps each tree's own albedo (its mean is the tables' ρ̄) and assumes
-//!   flat ground (the zfield shader does not know the terrain normal).
+//! - Eq. 22–23's means take the field's ρ̄ (as BN12's Ī_t, J̄_t do) and assume flat ground
+//!   (the zfield shader does not know the terrain normal).
+//! - One table set and one density for the species summed (BN12: a channel per species,
+//!   tables per model), corrected to first order by the local crown areas ([`density`]).
 //! - One table set for the scene's species mix, h and A area-weighted over it (BN12 §10 allows
 //!   per-mix sets); the patch is a periodic Poisson tile with the scene's pattern radius, not
 //!   the terrain's own tiling, so the wrap-around is exact. Density nodes are the patch's
 //!   realised densities (n trees / area).
 
+pub mod density;
 pub mod field;
 pub mod gpu;
 pub mod measure;
@@ -126,7 +135,8 @@ impl Default for ShaderMapBakeParams {
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ShaderMapDrawParams {
-    /// Scale of the field's tree density (the scene's trees over its area): 0 is bare terrain.
+    /// Scale of the field's tree density (the scene's local density, [`density`]): 0 is bare
+    /// terrain.
     pub density_scale: f32,
     /// BN12 §7's handover as the last band of `auto`: the trees fade over [0.8, 1] × its
     /// start while the ground takes their share; `false`: a hard switch (for measuring pops).
@@ -150,7 +160,7 @@ impl ParamTable for ShaderMapDrawParams {
         ParamDoc {
             key: "density_scale",
             unit: "×",
-            doc: "scale of the field's tree density (the scene's trees over its area); 0 draws bare terrain (0–100)",
+            doc: "scale of the field's local tree density (the scene's density maps and placed trees); 0 draws bare terrain (0–100)",
         },
         ParamDoc {
             key: "handover",
@@ -266,9 +276,7 @@ pub const ENTRY: super::registry::Entry = super::registry::Entry {
             "shadermap",
             &cx.settings_for("shadermap"),
         )?;
-        let [x, z] = cx.scene.terrain.size;
-        let density = (cx.scene.estimated_trees() / (x as f64 * z as f64).max(1.0)) as f32
-            * own.density_scale;
+        let density = density::DensityRaster::of_scene(cx.scene, cx.plants);
         // Alone (start 0) the field draws everything; as a chain's last band it takes over
         // from the trees at its start.
         let handover = field::Handover {
@@ -276,7 +284,14 @@ pub const ENTRY: super::registry::Entry = super::registry::Entry {
             nu: (own.nu >= 0.0).then_some(own.nu),
             fade: own.handover,
         };
-        let field = field::ForestField::new(cx.gpu, &tables, density, &draw, handover)?;
+        let field = field::ForestField::new(
+            cx.gpu,
+            &tables,
+            &density,
+            own.density_scale,
+            &draw,
+            handover,
+        )?;
         Ok(super::Built {
             technique: Box::new(field::ShaderMap { field }),
             reports: vec![report],

@@ -1,6 +1,7 @@
 //! A scene's forest as the tables see it: its species mix (weights, heights), pattern radius
 //! and peak density, and the tables baked for it (`sylvan bake --technique shadermap`).
 
+use super::density::DensityRaster;
 use super::measure::{ForestMix, MixSpecies, load_or_measure};
 use super::{ShaderMapBakeParams, ShaderMapDrawParams, ShaderMapTables};
 use crate::RenderError;
@@ -32,16 +33,15 @@ pub struct SceneMix {
     pub lambda_max: f32,
 }
 
-/// Most cells per side of the grid the peak density of placed trees is taken over, and the
-/// smallest cell side, metres (a cell holds a stand, not one tree).
-const PEAK_CELLS: usize = 32;
-const PEAK_CELL_M: f32 = 50.0;
-
 /// The mix of `scene`: from its density-driven species when it has them (mean densities as
-/// weights, the layouts' heights, the forest's own pattern radius and peak), else from its
-/// placed trees (counts, height extremes, the densest cell of a grid of cells of at least
-/// 50 m, at most 32 × 32).
-pub fn scene_mix(scene: &Scene) -> Result<SceneMix, RenderError> {
+/// weights, the layouts' heights, the forest's own pattern radius), else from its placed trees
+/// (counts, height extremes); the peak density is the highest of the field's density raster
+/// ([`DensityRaster`], at its effective densities for `plants`, one per species) and, for
+/// seeded species, their maps' peak — so the field never looks the tables up beyond their last
+/// node.
+pub fn scene_mix(scene: &Scene, plants: &[Plant]) -> Result<SceneMix, RenderError> {
+    let raster = DensityRaster::of_scene(scene, plants);
+    let raster_peak = raster.peak_effective();
     if let Some(seeded) = &scene.seeded {
         let layouts = seeded.layouts();
         let species: Vec<SceneSpecies> = layouts
@@ -57,7 +57,7 @@ pub fn scene_mix(scene: &Scene) -> Result<SceneMix, RenderError> {
             return Ok(SceneMix {
                 species,
                 radius_m: seeded.min_spacing_m(),
-                lambda_max: sylvan_scene::peak_per_ha(layouts) * 1e-4,
+                lambda_max: (sylvan_scene::peak_per_ha(layouts) * 1e-4).max(raster_peak),
             });
         }
     }
@@ -81,21 +81,10 @@ pub fn scene_mix(scene: &Scene) -> Result<SceneMix, RenderError> {
             }),
         }
     }
-    let [sx, sz] = scene.terrain.size.map(|v| v.max(1.0));
-    let n = |s: f32| ((s / PEAK_CELL_M) as usize).clamp(1, PEAK_CELLS);
-    let (nx, nz) = (n(sx), n(sz));
-    let mut cells = vec![0u32; nx * nz];
-    for t in &scene.trees {
-        let cx = ((t.position.x / sx * nx as f32).max(0.0) as usize).min(nx - 1);
-        let cz = ((t.position.z / sz * nz as f32).max(0.0) as usize).min(nz - 1);
-        cells[cz * nx + cx] += 1;
-    }
-    let cell_m2 = sx * sz / (nx * nz) as f32;
-    let lambda_max = *cells.iter().max().unwrap_or(&1) as f32 / cell_m2;
     Ok(SceneMix {
         species,
-        radius_m: sylvan_scene::pattern_radius_m(lambda_max),
-        lambda_max,
+        radius_m: sylvan_scene::pattern_radius_m(raster.max(0)),
+        lambda_max: raster_peak,
     })
 }
 
@@ -118,7 +107,7 @@ pub fn bake_scene(
         |name: &str| -> Vec<&Setting> { settings.iter().filter(|s| s.technique == name).collect() };
     let params = self::params(settings)?;
     let (zbake, zdraw) = resolve::<ZFieldBakeParams, ZFieldDrawParams>("zfield", &of("zfield"))?;
-    let mix = scene_mix(scene)?;
+    let mix = scene_mix(scene, plants)?;
     let mut zfields = Vec::with_capacity(mix.species.len());
     for s in &mix.species {
         let plant = plants
