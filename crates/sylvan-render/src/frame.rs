@@ -208,12 +208,23 @@ pub struct FrameResources {
     pub cascade_binds: Vec<wgpu::BindGroup>,
     /// One depth view per cascade layer (render attachments).
     pub cascade_views: Vec<wgpu::TextureView>,
+    /// One opacity view per cascade layer (the shadow passes' colour attachment,
+    /// [`SHADOW_OPACITY_FORMAT`]): the opacity of the nearest caster at each texel, so
+    /// semi-transparent casters (`zfield`, BN12 §5) cast soft shadows.
+    pub opacity_views: Vec<wgpu::TextureView>,
     /// Shadow-map resolution per cascade.
     pub shadow_resolution: u32,
     /// The main pass's attachments, which every main-pass pipeline is built for.
     pub target: crate::pipeline::MainTarget,
     shadow_map: wgpu::Texture,
+    shadow_opacity: wgpu::Texture,
 }
+
+/// The format of the cascades' opacity layer: the nearest caster's opacity (1: opaque).
+pub const SHADOW_OPACITY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
+
+/// Bytes per shadow-map texel: depth (4) and opacity (1).
+pub const SHADOW_TEXEL_BYTES: u64 = 5;
 
 impl FrameResources {
     /// Creates layouts, buffers and a `resolution²` shadow map per cascade, for main passes
@@ -256,6 +267,12 @@ impl FrameResources {
                     5,
                     wgpu::ShaderStages::FRAGMENT,
                     wgpu::SamplerBindingType::Filtering,
+                ),
+                layout::texture(
+                    6,
+                    wgpu::ShaderStages::FRAGMENT,
+                    wgpu::TextureSampleType::Float { filterable: false },
+                    wgpu::TextureViewDimension::D2Array,
                 ),
             ],
         });
@@ -304,6 +321,35 @@ impl FrameResources {
                 })
             })
             .collect();
+        let shadow_opacity = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("shadow_opacity"),
+            size: wgpu::Extent3d {
+                width: resolution,
+                height: resolution,
+                depth_or_array_layers: CASCADES as u32,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: SHADOW_OPACITY_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let opacity_array = shadow_opacity.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        });
+        let opacity_views = (0..CASCADES as u32)
+            .map(|layer| {
+                shadow_opacity.create_view(&wgpu::TextureViewDescriptor {
+                    label: Some("shadow_opacity_cascade"),
+                    dimension: Some(wgpu::TextureViewDimension::D2),
+                    base_array_layer: layer,
+                    array_layer_count: Some(1),
+                    ..Default::default()
+                })
+            })
+            .collect();
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("shadow_sampler"),
             mag_filter: wgpu::FilterMode::Linear,
@@ -339,6 +385,10 @@ impl FrameResources {
                     binding: 5,
                     resource: wgpu::BindingResource::Sampler(cover.sampler()),
                 },
+                wgpu::BindGroupEntry {
+                    binding: 6,
+                    resource: wgpu::BindingResource::TextureView(&opacity_array),
+                },
             ],
         });
         let cascade_binds = cascade_uniforms
@@ -362,16 +412,19 @@ impl FrameResources {
             main_bind,
             cascade_binds,
             cascade_views,
+            opacity_views,
             shadow_resolution: resolution,
             target,
             shadow_map,
+            shadow_opacity,
         }
     }
 
-    /// GPU bytes of the shadow maps.
+    /// GPU bytes of the shadow maps (depth and opacity).
     pub fn bytes(&self) -> u64 {
         let s = self.shadow_map.size();
-        s.width as u64 * s.height as u64 * s.depth_or_array_layers as u64 * 4
+        debug_assert_eq!(s, self.shadow_opacity.size());
+        s.width as u64 * s.height as u64 * s.depth_or_array_layers as u64 * SHADOW_TEXEL_BYTES
     }
 }
 

@@ -125,7 +125,9 @@ pub enum PassKind {
     /// The main view, into the renderer's [`MainTarget`] (Sylvan's own: HDR colour and
     /// reversed-Z depth).
     Main,
-    /// A shadow cascade: depth only, standard Z (compare Less), with slope-scaled bias.
+    /// A shadow cascade: depth, standard Z (compare Less), with slope-scaled bias, and the
+    /// nearest caster's opacity (`frame::SHADOW_OPACITY_FORMAT`; casters without a fragment
+    /// entry write 1).
     Shadow,
 }
 
@@ -139,7 +141,7 @@ pub struct PipelineSpec<'a> {
     pub module: &'a wgpu::ShaderModule,
     /// Vertex entry point.
     pub vs: &'a str,
-    /// Fragment entry point (`None`: depth only).
+    /// Fragment entry point (`None`: depth only — in a shadow pass, an opaque caster).
     pub fs: Option<&'a str>,
     /// Vertex buffers.
     pub buffers: &'a [Option<wgpu::VertexBufferLayout<'a>>],
@@ -177,11 +179,25 @@ pub fn build(gpu: &Gpu, spec: &PipelineSpec) -> wgpu::RenderPipeline {
             },
         ),
     };
-    let targets = [Some(wgpu::ColorTargetState {
-        format: spec.target.color_format,
-        blend: spec.blend,
-        write_mask: wgpu::ColorWrites::ALL,
+    let targets = [Some(match spec.pass {
+        PassKind::Main => wgpu::ColorTargetState {
+            format: spec.target.color_format,
+            blend: spec.blend,
+            write_mask: wgpu::ColorWrites::ALL,
+        },
+        // The nearest caster's opacity (the depth test keeps the nearest).
+        PassKind::Shadow => wgpu::ColorTargetState {
+            format: crate::frame::SHADOW_OPACITY_FORMAT,
+            blend: None,
+            write_mask: wgpu::ColorWrites::RED,
+        },
     })];
+    // A shadow pass has an opacity attachment, so every caster has a fragment stage:
+    // depth-only casters write opacity 1 (`fs_shadow_opaque`, frame.wgsl).
+    let fs = match spec.pass {
+        PassKind::Main => spec.fs,
+        PassKind::Shadow => Some(spec.fs.unwrap_or("fs_shadow_opaque")),
+    };
     gpu.device
         .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(spec.label),
@@ -192,15 +208,11 @@ pub fn build(gpu: &Gpu, spec: &PipelineSpec) -> wgpu::RenderPipeline {
                 compilation_options: Default::default(),
                 buffers: spec.buffers,
             },
-            fragment: spec.fs.map(|fs| wgpu::FragmentState {
+            fragment: fs.map(|fs| wgpu::FragmentState {
                 module: spec.module,
                 entry_point: Some(fs),
                 compilation_options: Default::default(),
-                targets: if spec.pass == PassKind::Main {
-                    &targets
-                } else {
-                    &[]
-                },
+                targets: &targets,
             }),
             primitive: wgpu::PrimitiveState {
                 cull_mode: spec.cull,

@@ -19,8 +19,9 @@ use sylvan_gpu::{FrameTimer, Gpu, OUTPUT_FORMAT, RenderTarget, Resolver, TimerKi
 use sylvan_plant::Plant;
 use sylvan_scene::{Camera, PlantSource, Scene, Setting, Sun};
 
-/// Most GPU memory the shadow cascades may take (declared before allocating).
-pub const MAX_SHADOW_BYTES: u64 = 1 << 30;
+/// Most GPU memory the shadow cascades may take, depth and opacity (declared before
+/// allocating): 1.25 GiB, four cascades of 8192².
+pub const MAX_SHADOW_BYTES: u64 = 5 << 28;
 
 /// Largest supersampling factor per axis (`--spp` up to 64).
 pub const MAX_SPP: u32 = 64;
@@ -310,13 +311,14 @@ impl Renderer {
             )));
         }
         let res = options.shadow_resolution;
-        let shadow_bytes = CASCADES as u64 * res as u64 * res as u64 * 4;
+        let texel = crate::frame::SHADOW_TEXEL_BYTES;
+        let shadow_bytes = CASCADES as u64 * res as u64 * res as u64 * texel;
         if shadow_bytes > MAX_SHADOW_BYTES {
             return Err(RenderError::Option(format!(
-                "--shadow-res {res}: {CASCADES} cascades of {res}² depth take {:.1} GB, more than the {} MB allowed — use {} or less",
+                "--shadow-res {res}: {CASCADES} cascades of {res}² depth and opacity take {:.1} GB, more than the {} MB allowed — use {} or less",
                 shadow_bytes as f64 / 1e9,
                 MAX_SHADOW_BYTES >> 20,
-                ((MAX_SHADOW_BYTES / (CASCADES as u64 * 4)) as f64).sqrt() as u32 & !255
+                ((MAX_SHADOW_BYTES / (CASCADES as u64 * texel)) as f64).sqrt() as u32 & !255
             )));
         }
         let bounds: Vec<SpeciesBounds> = plants
@@ -711,7 +713,15 @@ impl Renderer {
         for c in (0..CASCADES).filter(|_| shadows) {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("shadow_pass"),
-                color_attachments: &[],
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &self.frame.opacity_views[c],
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: &self.frame.cascade_views[c],
                     depth_ops: Some(wgpu::Operations {

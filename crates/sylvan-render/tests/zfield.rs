@@ -776,3 +776,72 @@ fn sky_light_follows_the_local_density_of_trees() {
         "a lone tree's hole is shallower: {lone_map} with the map vs {lone_one}"
     );
 }
+
+#[test]
+fn shadows_keep_the_crowns_opacity() {
+    // BN12 §5: the cascades store the casters' opacity, so a crown a quarter opaque lets three
+    // quarters of the sun through, as the meshes' alpha-tested leaves do on average (the PCF
+    // and the crop average their pattern). Thresholded at ½ (`shadow_opacity = false`, the
+    // negative control) it casts nothing. The ground under the veil's shadow, seen from
+    // straight above, against the same ground without it; sun only.
+    let sun = common::sun(180.0, 45.0);
+    let shadow_centre = AT + Vec3::new(0.0, 0.0, 7.0);
+    let camera = Camera {
+        position: shadow_centre + Vec3::new(0.0, 30.0, 0.01),
+        look_at: shadow_centre,
+        fov_deg: 6.0,
+    };
+    let scene_with = |trees: Vec<TreeInstance>| {
+        let mut s = common::scene(flat(), trees, camera, sun);
+        s.sky.ground_occlusion = false;
+        s.sky.zenith = [0.0; 3];
+        s.sky.horizon = [0.0; 3];
+        s.sky.ground = [0.0; 3];
+        s
+    };
+    let veil = [TreeInstance {
+        position: AT,
+        species: 0,
+        seed: 0,
+        height: 7.0,
+        rotation: 0.0,
+    }];
+    let luma = |scene: &Scene, technique: &str, extra: &[&str]| {
+        let mut settings = small_settings();
+        settings.extend(extra.iter().map(|a| Setting::from_arg(a).unwrap()));
+        let options = RenderOptions {
+            width: 64,
+            height: 64,
+            technique: technique.into(),
+            cache: CachePolicy::Off,
+            settings,
+            ..Default::default()
+        };
+        let gpu = gpu();
+        let (img, r) = common::render_with_options(&gpu, scene, &[common::veil_plant()], &options);
+        save(&format!("veil-{technique}-{}", extra.len()), &img);
+        // Linear radiance, green (the ground's strongest channel).
+        r.radiance_mean(&gpu, [8, 8, 48, 48]).expect("radiance")[1] as f64
+    };
+    let open = luma(&scene_with(Vec::new()), "geometry", &[]);
+    let shaded = scene_with(veil.to_vec());
+    let blocked = |l: f64| 1.0 - l / open;
+    let geometry = blocked(luma(&shaded, "geometry", &[]));
+    let soft = blocked(luma(&shaded, "zfield", &[]));
+    let hard = blocked(luma(&shaded, "zfield", &["zfield.shadow_opacity=false"]));
+    eprintln!(
+        "sunlight blocked under the veil: geometry {geometry:.3}, zfield {soft:.3}, thresholded {hard:.3}"
+    );
+    assert!(
+        (0.1..0.45).contains(&geometry),
+        "the meshes' veil blocks about a quarter: {geometry}"
+    );
+    assert!(
+        (soft - geometry).abs() <= 0.3 * geometry,
+        "zfield blocks {soft}, the meshes {geometry}"
+    );
+    assert!(
+        hard < 0.5 * geometry,
+        "thresholded at ½ the veil should cast (almost) nothing: {hard}"
+    );
+}

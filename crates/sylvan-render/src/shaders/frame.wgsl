@@ -39,6 +39,25 @@ struct Frame {
 @group(0) @binding(3) var cover_atlas: texture_2d<f32>;
 @group(0) @binding(4) var cover_tags: texture_2d<u32>;
 @group(0) @binding(5) var cover_sampler: sampler;
+// The cascades' opacity layer: the nearest caster's opacity per texel (1 opaque).
+@group(0) @binding(6) var shadow_opacity: texture_2d_array<f32>;
+
+// A shadow caster's output: its opacity (r) and depth.
+struct ShadowFragment {
+    @location(0) opacity: vec4<f32>,
+    @builtin(frag_depth) depth: f32,
+};
+
+// An opaque caster's opacity (shadow passes: the casters without their own fragment entry,
+// and those that test coverage and discard).
+fn opaque_caster() -> vec4<f32> {
+    return vec4<f32>(1.0);
+}
+
+@fragment
+fn fs_shadow_opaque() -> @location(0) vec4<f32> {
+    return opaque_caster();
+}
 
 // The shadow cascade covering `world` (by view distance), or CASCADES beyond the last one.
 fn cascade_index(world: vec3<f32>) -> u32 {
@@ -51,7 +70,8 @@ fn cascade_index(world: vec3<f32>) -> u32 {
     return CASCADES;
 }
 
-// Fraction of sunlight reaching `world` (1 = lit), 3×3 PCF in the cascade covering it.
+// Fraction of sunlight reaching `world` (1 = lit), 3×3 PCF in the cascade covering it; behind
+// a caster, 1 − its opacity.
 fn sun_visibility(world: vec3<f32>, normal_offset: vec3<f32>) -> f32 {
     if (frame.sun_dir.w < 0.5) {
         return 1.0;
@@ -68,11 +88,17 @@ fn sun_visibility(world: vec3<f32>, normal_offset: vec3<f32>) -> f32 {
         return 1.0;
     }
     let t = frame.shadow_params.x;
+    let size = vec2<f32>(textureDimensions(shadow_opacity).xy);
     var lit = 0.0;
     for (var y = -1; y <= 1; y = y + 1) {
         for (var x = -1; x <= 1; x = x + 1) {
-            lit = lit + textureSampleCompareLevel(shadow_map, shadow_sampler,
-                uv + vec2<f32>(f32(x), f32(y)) * t, i32(cascade), ndc.z);
+            let tap = uv + vec2<f32>(f32(x), f32(y)) * t;
+            let behind = 1.0 - textureSampleCompareLevel(shadow_map, shadow_sampler, tap, i32(cascade), ndc.z);
+            // Behind the nearest caster, the light it lets through (BN12 §5: opacity stored in
+            // the shadow maps for soft shadows).
+            let texel = clamp(vec2<i32>(tap * size), vec2<i32>(0), vec2<i32>(size) - 1);
+            let opacity = textureLoad(shadow_opacity, texel, i32(cascade), 0).r;
+            lit = lit + 1.0 - behind * opacity;
         }
     }
     // Fade out over the last 10% of the last cascade instead of a hard edge.

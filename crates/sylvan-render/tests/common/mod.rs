@@ -119,6 +119,44 @@ pub fn test_tree() -> Plant {
     }
 }
 
+/// A 7 m "veil": one horizontal 6 m leaf card at the top of a bare pole, its texture opaque
+/// on one texel of every 2 × 2 (a quarter of it), so any image of it is a quarter opaque.
+pub fn veil_plant() -> Plant {
+    let mut leaves = Mesh::default();
+    let (s, y) = (3.0, 7.0);
+    push_quad(
+        &mut leaves,
+        [
+            Vec3::new(-s, y, s),
+            Vec3::new(s, y, s),
+            Vec3::new(s, y, -s),
+            Vec3::new(-s, y, -s),
+        ],
+        Vec3::Y,
+        [0.12, 0.3, 0.06],
+    );
+    let n = 32u32;
+    let mut rgba = vec![0u8; (n * n * 4) as usize];
+    for y in (0..n).step_by(2) {
+        for x in (0..n).step_by(2) {
+            rgba[((y * n + x) * 4) as usize..][..4].copy_from_slice(&[200, 230, 180, 255]);
+        }
+    }
+    Plant {
+        name: "veil".into(),
+        leaves,
+        leaf_texture: LeafTexture {
+            width: n,
+            height: n,
+            rgba,
+        },
+        bbox_min: [-3.0, 0.0, -3.0],
+        bbox_max: [3.0, 7.0, 3.0],
+        internodes: 1,
+        ..Default::default()
+    }
+}
+
 /// A terrain of `size` metres with heights from `f(x, z)`.
 pub fn terrain(size: f32, res: u32, f: impl Fn(f32, f32) -> f32) -> Terrain {
     let mut heights = Vec::with_capacity((res * res) as usize);

@@ -247,15 +247,17 @@ fn fs_cloud_lowres(in: CloudOut) -> @location(0) vec4<f32> {
 }
 
 @fragment
-fn fs_cloud_shadow(in: CloudOut) {
+fn fs_cloud_shadow(in: CloudOut) -> @location(0) vec4<f32> {
     if (evaluate(in, false, true).kind == 0u) {
         discard;
     }
+    return opaque_caster();
 }
 
 @fragment
-fn fs_cloud_lowres_shadow(in: CloudOut) {
+fn fs_cloud_lowres_shadow(in: CloudOut) -> @location(0) vec4<f32> {
     if (evaluate(in, false, false).kind == 0u) {
         discard;
     }
+    return opaque_caster();
 }

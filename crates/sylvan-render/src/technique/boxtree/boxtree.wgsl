@@ -197,10 +197,11 @@ fn vs_impostor_shadow(in: ImpostorIn, inst: TreeInstance) -> ImpostorOut {
 }
 
 @fragment
-fn fs_impostor_shadow(in: ImpostorOut) {
+fn fs_impostor_shadow(in: ImpostorOut) -> @location(0) vec4<f32> {
     let t = fetch(in);
     let a = presence_alpha(t.color.a, in.weight.x);
     if (a <= hash13(vec3<f32>(in.pos.xy, f32(in.ids.y) * 7.0))) {
         discard;
     }
+    return opaque_caster();
 }

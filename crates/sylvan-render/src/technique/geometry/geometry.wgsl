@@ -116,8 +116,9 @@ fn vs_plant_shadow(in: PlantIn, inst: TreeInstance) -> ShadowOut {
 }
 
 @fragment
-fn fs_leaf_shadow(in: ShadowOut) {
+fn fs_leaf_shadow(in: ShadowOut) -> @location(0) vec4<f32> {
     if (textureSampleLevel(leaf_texture, leaf_sampler, in.uv, 0.0).a < 0.5 || leaf_dropped(in.keep)) {
         discard;
     }
+    return opaque_caster();
 }

@@ -263,7 +263,7 @@ fn vs_hbt_shadow(in: HbtIn) -> HbtOut {
 }
 
 @fragment
-fn fs_hbt_shadow(in: HbtOut) {
+fn fs_hbt_shadow(in: HbtOut) -> @location(0) vec4<f32> {
     let sp = species_info[in.views.w];
     let lod = in.lod;
     var alpha = 0.0;
@@ -279,4 +279,5 @@ fn fs_hbt_shadow(in: HbtOut) {
     if (presence_alpha(alpha, in.extra.y) <= hash13(vec3<f32>(in.pos.xy, 3.0 + 97.0 * in.extra.x))) {
         discard;
     }
+    return opaque_caster();
 }

@@ -236,7 +236,7 @@ fn vs_octahedral_shadow(in: OctIn, inst: TreeInstance) -> OctOut {
 }
 
 @fragment
-fn fs_octahedral_shadow(in: OctOut) -> @builtin(frag_depth) f32 {
+fn fs_octahedral_shadow(in: OctOut) -> ShadowFragment {
     let sp = oct_species[in.views.w];
     let p = instance_to_model(in.world, in.base_scale, in.rot);
     let r = -instance_dir_to_model(frame.sun_dir.xyz, in.rot);
@@ -247,5 +247,5 @@ fn fs_octahedral_shadow(in: OctOut) -> @builtin(frag_depth) f32 {
     let offset = atlas.draw.z * sp.centre_radius.w * in.base_scale.w;
     let world = instance_to_world(s.point, in.base_scale, in.rot) - frame.sun_dir.xyz * offset;
     let clip = frame.view_proj * vec4<f32>(world, 1.0);
-    return clamp(clip.z / clip.w, 0.0, 1.0);
+    return ShadowFragment(opaque_caster(), clamp(clip.z / clip.w, 0.0, 1.0));
 }

@@ -179,7 +179,7 @@ impl ZFieldBindings {
             extra: [
                 draw.lod_bias,
                 f32::from(u8::from(draw.density_per_ha > 0.0)),
-                0.0,
+                f32::from(u8::from(draw.shadow_opacity)),
                 0.0,
             ],
         };
@@ -309,12 +309,15 @@ impl ZField {
                 None,
             )
         };
+        // The casters fade into the field as the trees do (group 2 there too).
+        let mut shadow_layouts = vec![&frame.shadow_layout, &bind_layout];
+        shadow_layouts.extend(field.map(|f| &f.layout));
         let shadow_pipeline = build(
             "zfield_shadow",
             "vs_zfield_shadow",
             "fs_zfield_shadow",
             PassKind::Shadow,
-            &[&frame.shadow_layout, &bind_layout],
+            &shadow_layouts,
             None,
         );
         Ok(Self {
@@ -366,7 +369,7 @@ impl Technique for ZField {
         });
         pass.set_bind_group(0, ctx.frame_bind, &[]);
         pass.set_bind_group(1, &self.bind, &[]);
-        if let (true, Some(field)) = (main, &self.field) {
+        if let Some(field) = &self.field {
             pass.set_bind_group(2, field, &[]);
         }
         if let Some(culled) = ctx.culled.first() {

@@ -347,15 +347,16 @@ fn z_fragment(in: ZOut, masked: bool) -> ZFragment {
 }
 
 // Shadow casters (BN12 §5): the quad facing the sun, step 5 only, at the max depth z̄ (the
-// trees' back side, so they do not shadow their own lit side); coverage thresholded (the 3×3
-// PCF softens it) — the depth-only cascades cannot store opacity.
+// trees' back side, so they do not shadow their own lit side), storing the crown's opacity α
+// in the cascades' opacity layer: what lies behind gets 1 − α of the sun (BN12's soft
+// shadows; the 3×3 PCF softens the edges). `shadow_opacity = false`: opaque where α > ½.
 @vertex
 fn vs_zfield_shadow(in: ZIn, inst: TreeInstance) -> ZOut {
     return z_vertex(in, inst, frame.sun_dir.xyz, true);
 }
 
 @fragment
-fn fs_zfield_shadow(in: ZOut) -> @builtin(frag_depth) f32 {
+fn fs_zfield_shadow(in: ZOut) -> ShadowFragment {
     let sp = z_species[in.views.w];
     let p = instance_to_model(in.world, in.base_scale, in.rot);
     let lm = instance_dir_to_model(frame.sun_dir.xyz, in.rot);
@@ -363,16 +364,21 @@ fn fs_zfield_shadow(in: ZOut) -> @builtin(frag_depth) f32 {
     if (z.w < 0.004) {
         discard;
     }
-    // Opaque where α > 1/2 (measured closest to the geometry's alpha-tested casters: ꟻLIP
-    // 0.0631 vs 0.0648 stochastic on the default scene); stochastic by opacity while the tree
-    // fades (an LOD transition), so its shadow fades too.
-    let a = presence_alpha(z.w, in.rot.w);
-    let threshold = select(0.5, hash13(vec3<f32>(in.pos.xy, 3.0 + 97.0 * in.rot.z)), in.rot.w < 0.999);
+    // While the tree cross-fades with another technique its shadow fades stochastically by
+    // presence (opaque, so it composes with the other's binary casters); into a forest field
+    // (BN12 §7) its opacity fades as the tree does — stochastically when thresholded.
+    let presence = in.rot.w < 0.999;
+    let fade = field_fade(in.base_scale.xyz);
+    let a = presence_alpha(z.w, in.rot.w) * fade;
+    let soft = zp.extra.z > 0.5;
+    let stochastic = presence || (!soft && fade < 0.999);
+    let threshold = select(select(0.5, 0.004, soft), hash13(vec3<f32>(in.pos.xy, 3.0 + 97.0 * in.rot.z)), stochastic);
     if (a <= threshold) {
         discard;
     }
+    let opacity = select(1.0, clamp(a, 0.0, 1.0), soft && !presence);
     let back = p - lm * plane_distance(sp, z.y, z.w);
     let world = instance_to_world(back, in.base_scale, in.rot);
     let clip = frame.view_proj * vec4<f32>(world, 1.0);
-    return clamp(clip.z / clip.w, 0.0, 1.0);
+    return ShadowFragment(vec4<f32>(opacity), clamp(clip.z / clip.w, 0.0, 1.0));
 }
