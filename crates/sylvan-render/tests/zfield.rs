@@ -781,8 +781,8 @@ fn sky_light_follows_the_local_density_of_trees() {
 fn shadows_keep_the_crowns_opacity() {
     // BN12 §5: the cascades store the casters' opacity, so a crown a quarter opaque lets three
     // quarters of the sun through, as the meshes' alpha-tested leaves do on average (the PCF
-    // and the crop average their pattern). Thresholded at ½ (`shadow_opacity = false`, the
-    // negative control) it casts nothing. The ground under the veil's shadow, seen from
+    // and the crop average their pattern), with `shadow_opacity = true`. Thresholded at ½ (the
+    // default, here the negative control) it casts nothing. The ground under the veil's shadow, seen from
     // straight above, against the same ground without it; sun only.
     let sun = common::sun(180.0, 45.0);
     let shadow_centre = AT + Vec3::new(0.0, 0.0, 7.0);
@@ -827,8 +827,8 @@ fn shadows_keep_the_crowns_opacity() {
     let shaded = scene_with(veil.to_vec());
     let blocked = |l: f64| 1.0 - l / open;
     let geometry = blocked(luma(&shaded, "geometry", &[]));
-    let soft = blocked(luma(&shaded, "zfield", &[]));
-    let hard = blocked(luma(&shaded, "zfield", &["zfield.shadow_opacity=false"]));
+    let soft = blocked(luma(&shaded, "zfield", &["zfield.shadow_opacity=true"]));
+    let hard = blocked(luma(&shaded, "zfield", &[]));
     eprintln!(
         "sunlight blocked under the veil: geometry {geometry:.3}, zfield {soft:.3}, thresholded {hard:.3}"
     );

@@ -60,13 +60,15 @@
 //!   the crowns' shapes; `δ_g` is eq. 9's hole at the depth of the mean tree for the local
 //!   density (BN12 takes it from the shader-map's 𝔻, which only a forest field has — with
 //!   one, the ground uses 𝔻); Γ is one disk per tree from the plant's box, at ~2 m texels.
-//! - Shadows (BN12 §5's soft shadows, `shadow_opacity`, default on): casters write `z̄` and
-//!   their opacity `α` into the cascades' opacity layer; behind the nearest caster a receiver
-//!   gets `1 − α` of the sun, per 3×3 PCF tap. One layer, as BN12's: crowns overlapping along
-//!   the sun keep the nearest one's opacity. While a tree fades (an LOD transition) its caster
-//!   is stochastic by `α`, opaque. Off: opaque where `α > ½`. ꟻLIP against 16-spp geometry:
-//!   broadleaf scene 0.1754 soft vs 0.1823 thresholded; default scene 0.0567 vs 0.0552 (the
-//!   pines' dense crowns favour the threshold; a threshold fails sparse crowns outright).
+//! - Shadows: BN12 §5's soft shadows are built (`shadow_opacity = true`: casters write `z̄`
+//!   and their opacity `α` into the cascades' opacity layer; behind the nearest caster a
+//!   receiver gets `1 − α` of the sun, per 3×3 PCF tap) but are **not the default**: one layer,
+//!   as BN12's, keeps only the nearest crown's opacity, so under a dense canopy the ground gets
+//!   far too much sun (E1 from straight above: +58 % against the field's tables, which count
+//!   every layer; thresholded +4 %). The default casters are opaque where `α > ½`. ꟻLIP
+//!   against 16-spp geometry: broadleaf scene 0.1754 soft vs 0.1823 thresholded, default
+//!   scene 0.0567 vs 0.0552. While a tree fades (an LOD transition) its caster is stochastic
+//!   by `α`, opaque; into a forest field its opacity fades with the tree.
 //! - `opacity_scaled_tau` (default on): τ is scaled per light ray by `ln(1 − α_l)/ln 0.01`, the
 //!   optical depth the light view's opacity implies relative to an opaque chord, so sparse
 //!   crowns (and trunks below them) are not lit as if behind solid foliage; off is BN12's
@@ -229,7 +231,7 @@ pub struct ZFieldDrawParams {
     /// Mip bias of the camera pass (negative: sharper), −4 to 4.
     pub lod_bias: f32,
     /// Shadow casters store their opacity in the cascades' opacity layer (BN12 §5: soft
-    /// shadows, light behind a crown × 1 − α); false: opaque where α > ½.
+    /// shadows, light behind a crown × 1 − α); false (the default): opaque where α > ½.
     pub shadow_opacity: bool,
 }
 
@@ -247,7 +249,7 @@ impl Default for ZFieldDrawParams {
             per_tree_masks: true,
             blend: true,
             lod_bias: -1.0,
-            shadow_opacity: true,
+            shadow_opacity: false,
         }
     }
 }
@@ -312,7 +314,7 @@ impl ParamTable for ZFieldDrawParams {
         ParamDoc {
             key: "shadow_opacity",
             unit: "bool",
-            doc: "shadows keep the crowns' opacity (BN12 §5 soft shadows: 1 − α behind a crown); false: opaque where α > ½",
+            doc: "shadows keep the crowns' opacity (BN12 §5 soft shadows: 1 − α behind the nearest crown; too bright under dense canopies); false (default): opaque where α > ½",
         },
     ];
 

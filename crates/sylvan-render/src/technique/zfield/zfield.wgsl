@@ -347,9 +347,10 @@ fn z_fragment(in: ZOut, masked: bool) -> ZFragment {
 }
 
 // Shadow casters (BN12 §5): the quad facing the sun, step 5 only, at the max depth z̄ (the
-// trees' back side, so they do not shadow their own lit side), storing the crown's opacity α
-// in the cascades' opacity layer: what lies behind gets 1 − α of the sun (BN12's soft
-// shadows; the 3×3 PCF softens the edges). `shadow_opacity = false`: opaque where α > ½.
+// trees' back side, so they do not shadow their own lit side); opaque where α > ½ (the 3×3
+// PCF softens the edges), or with `shadow_opacity` storing the crown's opacity α in the
+// cascades' opacity layer: what lies behind the nearest crown gets 1 − α of the sun (BN12's
+// soft shadows; one layer, so too bright under dense canopies — not the default).
 @vertex
 fn vs_zfield_shadow(in: ZIn, inst: TreeInstance) -> ZOut {
     return z_vertex(in, inst, frame.sun_dir.xyz, true);
