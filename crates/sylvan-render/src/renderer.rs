@@ -651,6 +651,12 @@ impl Renderer {
         );
         let frustum = Frustum::from_matrix(fv.view_proj);
         let cpu_start = std::time::Instant::now();
+        let mut frustums: [Option<Frustum>; 1 + CASCADES] = Default::default();
+        frustums[0] = Some(frustum);
+        for (f, c) in frustums[1..].iter_mut().zip(&cascades) {
+            *f = shadows.then(|| Frustum::from_matrix(c.view_proj));
+        }
+        self.terrain.cull(&frustums);
         let cover_range = self.far.min(view.far);
         self.cover.prepare(gpu, view.eye, cover_range, &frustum);
         let windows = match self.world {
@@ -660,11 +666,6 @@ impl Renderer {
         if let Some(world) = &mut self.world {
             if let Some(w) = &windows {
                 world.set_windows(w);
-            }
-            let mut frustums: [Option<Frustum>; 1 + CASCADES] = Default::default();
-            frustums[0] = Some(frustum);
-            for (f, c) in frustums[1..].iter_mut().zip(&cascades) {
-                *f = shadows.then(|| Frustum::from_matrix(c.view_proj));
             }
             let wv = WorldView {
                 eye: view.eye,
@@ -735,8 +736,9 @@ impl Renderer {
                 multiview_mask: None,
             });
             pass.set_bind_group(0, &self.frame.cascade_binds[c], &[]);
-            shadow.draw_calls += self.terrain.draw(&mut pass, true);
-            shadow.triangles += self.terrain.triangles();
+            let (calls, triangles) = self.terrain.draw(&mut pass, 1 + c);
+            shadow.draw_calls += calls;
+            shadow.triangles += triangles;
             let ctx = DrawContext {
                 pass: 1 + c,
                 frame_bind: &self.frame.cascade_binds[c],
@@ -774,12 +776,12 @@ impl Renderer {
             let n: u32 = (0..world.groups(r)).map(|g| world.listed(r, 0, g)).sum();
             *drawn.entry(req.technique.to_string()).or_default() += n;
         }
-        let terrain = self.terrain.triangles();
+        let terrain = |p: usize| self.terrain.visible_triangles(p);
         let shadow = (1..=CASCADES)
             .filter(|_| self.shadows_now)
-            .map(|p| terrain + tris(p))
+            .map(|p| terrain(p) + tris(p))
             .sum();
-        Ok((drawn, terrain + tris(0), shadow))
+        Ok((drawn, terrain(0) + tris(0), shadow))
     }
 
     /// The last rendered frame as an sRGB image.    /// The last rendered frame as an sRGB image.
@@ -906,8 +908,9 @@ impl Renderer {
             counts.draw_calls += self.sky.draw(pass);
         }
         if layers.terrain {
-            counts.draw_calls += self.terrain.draw(pass, false);
-            counts.triangles += self.terrain.triangles();
+            let (calls, triangles) = self.terrain.draw(pass, 0);
+            counts.draw_calls += calls;
+            counts.triangles += triangles;
         }
         if layers.trees {
             let culled = self.world.as_ref().map(World::culled).unwrap_or_default();

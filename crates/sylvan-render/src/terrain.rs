@@ -1,14 +1,31 @@
 //! The terrain mesh on the GPU and its main and shadow pipelines (`shaders/terrain.wgsl`).
+//!
+//! The grid's indices are stored chunk by chunk ([`CHUNK_QUADS`]² quads each, with their
+//! bounds), and each pass draws only the chunks its frustum reaches (consecutive ones merged
+//! into one draw): a camera near the ground of a wide terrain, or a cascade a few hundred metres
+//! across, no longer pays for the whole grid in every pass.
 
-use crate::frame::FrameResources;
+use crate::frame::{FrameResources, Frustum};
 use crate::pipeline::{self, PassKind, PipelineSpec};
 use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use std::ops::Range;
 use sylvan_gpu::Gpu;
 use sylvan_scene::Terrain;
 use wgpu::util::DeviceExt;
 
 /// Most grid samples along one side that are drawn; larger heightmaps are resampled.
 pub const MAX_DRAWN_SIDE: u32 = 1025;
+
+/// Quads per side of a culling chunk.
+pub const CHUNK_QUADS: u32 = 64;
+
+/// A chunk of the grid: its index range and bounds.
+struct Chunk {
+    indices: Range<u32>,
+    min: Vec3,
+    max: Vec3,
+}
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -21,7 +38,9 @@ struct GpuTerrainVertex {
 pub struct TerrainPass {
     vertices: wgpu::Buffer,
     indices: wgpu::Buffer,
-    index_count: u32,
+    chunks: Vec<Chunk>,
+    /// Per pass (0 the camera, 1 + c cascade c): the index ranges to draw.
+    visible: Vec<Vec<Range<u32>>>,
     main: wgpu::RenderPipeline,
     shadow: wgpu::RenderPipeline,
     /// The forest field's group 1 (BN12's shader-map), when the technique has one.
@@ -51,11 +70,28 @@ impl TerrainPass {
             }
         }
         let mut idx = Vec::with_capacity(((cols - 1) * (rows - 1) * 6) as usize);
-        for r in 0..rows - 1 {
-            for c in 0..cols - 1 {
-                let i = r * cols + c;
-                // Counter-clockwise seen from above (+Y).
-                idx.extend_from_slice(&[i, i + cols, i + 1, i + 1, i + cols, i + cols + 1]);
+        let mut chunks = Vec::new();
+        for r0 in (0..rows - 1).step_by(CHUNK_QUADS as usize) {
+            for c0 in (0..cols - 1).step_by(CHUNK_QUADS as usize) {
+                let start = idx.len() as u32;
+                let (mut min, mut max) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+                for r in r0..(r0 + CHUNK_QUADS).min(rows - 1) {
+                    for c in c0..(c0 + CHUNK_QUADS).min(cols - 1) {
+                        let i = r * cols + c;
+                        // Counter-clockwise seen from above (+Y).
+                        let quad = [i, i + cols, i + 1, i + 1, i + cols, i + cols + 1];
+                        for &v in &quad {
+                            let p = Vec3::from(verts[v as usize].position);
+                            (min, max) = (min.min(p), max.max(p));
+                        }
+                        idx.extend_from_slice(&quad);
+                    }
+                }
+                chunks.push(Chunk {
+                    indices: start..idx.len() as u32,
+                    min,
+                    max,
+                });
             }
         }
         let vertices = gpu
@@ -123,19 +159,16 @@ impl TerrainPass {
                 blend: None,
             },
         );
+        let all: Vec<Range<u32>> = std::iter::once(0..idx.len() as u32).collect();
         Self {
             vertices,
             indices,
-            index_count: idx.len() as u32,
+            chunks,
+            visible: vec![all; 1 + crate::frame::CASCADES],
             main,
             shadow,
             field: field.map(|f| f.bind.clone()),
         }
-    }
-
-    /// Triangles drawn per pass.
-    pub fn triangles(&self) -> u64 {
-        self.index_count as u64 / 3
     }
 
     /// GPU bytes.
@@ -143,15 +176,50 @@ impl TerrainPass {
         self.vertices.size() + self.indices.size()
     }
 
-    /// Records the terrain into a main (`shadow = false`) or shadow pass; returns draw calls.
-    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, shadow: bool) -> u32 {
+    /// Picks, for each pass (0 the camera, 1 + c cascade c), the chunks its frustum reaches
+    /// (`None`: a pass not drawn this frame).
+    pub fn cull(&mut self, frustums: &[Option<Frustum>]) {
+        for (visible, frustum) in self.visible.iter_mut().zip(frustums) {
+            visible.clear();
+            let Some(f) = frustum else { continue };
+            for chunk in &self.chunks {
+                if !f.intersects_box(chunk.min, chunk.max) {
+                    continue;
+                }
+                match visible.last_mut() {
+                    Some(last) if last.end == chunk.indices.start => last.end = chunk.indices.end,
+                    _ => visible.push(chunk.indices.clone()),
+                }
+            }
+        }
+    }
+
+    /// Triangles drawn in pass `which` (as [`TerrainPass::draw`] counts them).
+    pub fn visible_triangles(&self, which: usize) -> u64 {
+        self.visible
+            .get(which)
+            .map_or(0, |v| v.iter().map(|r| (r.end - r.start) as u64 / 3).sum())
+    }
+
+    /// Records the terrain's chunks visible in `pass` (0: a main pass, 1 + c: cascade c's
+    /// shadow pass); returns draw calls and triangles.
+    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, which: usize) -> (u32, u64) {
+        let shadow = which > 0;
+        let ranges = &self.visible[which.min(self.visible.len() - 1)];
+        if ranges.is_empty() {
+            return (0, 0);
+        }
         pass.set_pipeline(if shadow { &self.shadow } else { &self.main });
         if let (false, Some(field)) = (shadow, &self.field) {
             pass.set_bind_group(1, field, &[]);
         }
         pass.set_vertex_buffer(0, self.vertices.slice(..));
         pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
-        pass.draw_indexed(0..self.index_count, 0, 0..1);
-        1
+        let mut triangles = 0;
+        for r in ranges {
+            pass.draw_indexed(r.clone(), 0, 0..1);
+            triangles += (r.end - r.start) as u64 / 3;
+        }
+        (ranges.len() as u32, triangles)
     }
 }

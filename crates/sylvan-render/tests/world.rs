@@ -177,3 +177,46 @@ fn sphere(t: &TreeInstance, b: &sylvan_render::instances::SpeciesBounds) -> (Vec
         );
     (centre, (b.max - b.min).length() * 0.5 * scale)
 }
+
+#[test]
+fn each_pass_draws_only_the_terrain_it_sees() {
+    // A 20 km terrain of 513² samples (512² quads, 64² per chunk), no trees; a camera 200 m
+    // up looking down at the ground within about 1.3 km sees a few chunks, and so do the
+    // shadow cascades: each pass draws the chunks its frustum reaches, not the grid. A camera
+    // high above the centre looking straight down sees all of it.
+    let gpu = gpu();
+    let t = terrain(20_000.0, 513, |x, z| {
+        30.0 * (x * 0.001).sin() * (z * 0.0013).cos()
+    });
+    let grid = 512u64 * 512 * 2;
+    let low = Camera {
+        position: Vec3::new(1000.0, 200.0, 1000.0),
+        look_at: Vec3::new(1000.0, 0.0, 1300.0),
+        fov_deg: 50.0,
+    };
+    let above = Camera {
+        position: Vec3::new(10_000.0, 12_000.0, 10_001.0),
+        look_at: Vec3::new(10_000.0, 0.0, 10_000.0),
+        fov_deg: 90.0,
+    };
+    let options = RenderOptions {
+        width: 32,
+        height: 32,
+        ..Default::default()
+    };
+    let s = scene(t, Vec::new(), low, sun(135.0, 35.0));
+    let mut r = Renderer::new(&gpu, &s, &[test_tree()], &options).expect("renderer");
+    let near = r.render(&gpu, &low, &s.sun).expect("frame");
+    let far = r.render(&gpu, &above, &s.sun).expect("frame");
+    eprintln!(
+        "terrain triangles of {grid}: low camera {} (shadows {}), above {}",
+        near.triangles, near.shadow_triangles, far.triangles
+    );
+    assert!(near.triangles < grid / 10, "{}", near.triangles);
+    assert!(
+        near.shadow_triangles < grid / 4,
+        "{}",
+        near.shadow_triangles
+    );
+    assert_eq!(far.triangles, grid, "from above the whole grid is in view");
+}
