@@ -220,6 +220,46 @@ pub struct FrameResources {
     shadow_opacity: wgpu::Texture,
 }
 
+/// A `resolution²` texture of `format` with one layer per cascade (a render attachment, sampled
+/// by the main passes): the texture, its array view and one view per layer.
+fn cascade_layers(
+    gpu: &Gpu,
+    label: &str,
+    format: wgpu::TextureFormat,
+    resolution: u32,
+) -> (wgpu::Texture, wgpu::TextureView, Vec<wgpu::TextureView>) {
+    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: resolution,
+            height: resolution,
+            depth_or_array_layers: CASCADES as u32,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+        view_formats: &[],
+    });
+    let array = texture.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    });
+    let layers = (0..CASCADES as u32)
+        .map(|layer| {
+            texture.create_view(&wgpu::TextureViewDescriptor {
+                label: Some(label),
+                dimension: Some(wgpu::TextureViewDimension::D2),
+                base_array_layer: layer,
+                array_layer_count: Some(1),
+                ..Default::default()
+            })
+        })
+        .collect();
+    (texture, array, layers)
+}
+
 /// The format of the cascades' opacity layer: the nearest caster's opacity (1: opaque).
 pub const SHADOW_OPACITY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
 
@@ -292,64 +332,10 @@ impl FrameResources {
         let cascade_uniforms: Vec<_> = (0..CASCADES)
             .map(|_| make_uniform("cascade_uniforms"))
             .collect();
-        let shadow_map = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("shadow_map"),
-            size: wgpu::Extent3d {
-                width: resolution,
-                height: resolution,
-                depth_or_array_layers: CASCADES as u32,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: DEPTH_FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
-        let array_view = shadow_map.create_view(&wgpu::TextureViewDescriptor {
-            dimension: Some(wgpu::TextureViewDimension::D2Array),
-            ..Default::default()
-        });
-        let cascade_views = (0..CASCADES as u32)
-            .map(|layer| {
-                shadow_map.create_view(&wgpu::TextureViewDescriptor {
-                    label: Some("shadow_cascade"),
-                    dimension: Some(wgpu::TextureViewDimension::D2),
-                    base_array_layer: layer,
-                    array_layer_count: Some(1),
-                    ..Default::default()
-                })
-            })
-            .collect();
-        let shadow_opacity = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("shadow_opacity"),
-            size: wgpu::Extent3d {
-                width: resolution,
-                height: resolution,
-                depth_or_array_layers: CASCADES as u32,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: SHADOW_OPACITY_FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
-        let opacity_array = shadow_opacity.create_view(&wgpu::TextureViewDescriptor {
-            dimension: Some(wgpu::TextureViewDimension::D2Array),
-            ..Default::default()
-        });
-        let opacity_views = (0..CASCADES as u32)
-            .map(|layer| {
-                shadow_opacity.create_view(&wgpu::TextureViewDescriptor {
-                    label: Some("shadow_opacity_cascade"),
-                    dimension: Some(wgpu::TextureViewDimension::D2),
-                    base_array_layer: layer,
-                    array_layer_count: Some(1),
-                    ..Default::default()
-                })
-            })
-            .collect();
+        let (shadow_map, array_view, cascade_views) =
+            cascade_layers(gpu, "shadow_map", DEPTH_FORMAT, resolution);
+        let (shadow_opacity, opacity_array, opacity_views) =
+            cascade_layers(gpu, "shadow_opacity", SHADOW_OPACITY_FORMAT, resolution);
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("shadow_sampler"),
             mag_filter: wgpu::FilterMode::Linear,

@@ -121,6 +121,38 @@ pub fn normal_mips(base: Level) -> Vec<Level> {
     levels
 }
 
+/// Uploads one level of `format` texels (`bytes`, layer-major, tightly packed) as a sampled
+/// texture of `size` (width, height, depth or layers) and `dimension`.
+pub fn upload_raw(
+    gpu: &sylvan_gpu::Gpu,
+    label: &str,
+    size: [u32; 3],
+    dimension: wgpu::TextureDimension,
+    format: wgpu::TextureFormat,
+    bytes: &[u8],
+) -> wgpu::Texture {
+    use wgpu::util::DeviceExt;
+    gpu.device.create_texture_with_data(
+        &gpu.queue,
+        &wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width: size[0],
+                height: size[1],
+                depth_or_array_layers: size[2],
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension,
+            format,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        },
+        wgpu::util::TextureDataOrder::LayerMajor,
+        bytes,
+    )
+}
+
 /// Uploads a mip chain as an `Rgba8UnormSrgb` 2D texture.
 pub fn upload(gpu: &sylvan_gpu::Gpu, label: &str, levels: &[Level]) -> wgpu::Texture {
     upload_as(gpu, label, levels, wgpu::TextureFormat::Rgba8UnormSrgb)

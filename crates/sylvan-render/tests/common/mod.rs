@@ -89,26 +89,15 @@ pub fn test_tree() -> Plant {
             );
         }
     }
-    // An opaque disc leaf texture.
-    let n = 32u32;
-    let mut rgba = vec![0u8; (n * n * 4) as usize];
-    for y in 0..n {
-        for x in 0..n {
-            let (dx, dy) = (x as f32 - 15.5, y as f32 - 15.5);
-            if dx * dx + dy * dy < 15.0 * 15.0 {
-                rgba[((y * n + x) * 4) as usize..][..4].copy_from_slice(&[200, 230, 180, 255]);
-            }
-        }
-    }
     Plant {
         name: "test-tree".into(),
         wood,
         leaves,
-        leaf_texture: LeafTexture {
-            width: n,
-            height: n,
-            rgba,
-        },
+        // An opaque disc.
+        leaf_texture: leaf_texture(|x, y| {
+            let (dx, dy) = (x as f32 - 15.5, y as f32 - 15.5);
+            dx * dx + dy * dy < 15.0 * 15.0
+        }),
         bbox_min: [-3.0, 0.0, -3.0],
         bbox_max: [3.0, 10.0, 3.0],
         hierarchy: Default::default(),
@@ -119,8 +108,26 @@ pub fn test_tree() -> Plant {
     }
 }
 
-/// A 7 m "veil": one horizontal 6 m leaf card at the top of a bare pole, its texture opaque
-/// on one texel of every 2 × 2 (a quarter of it), so any image of it is a quarter opaque.
+/// A 32² leaf texture, opaque (a pale green) where `opaque(x, y)`, transparent elsewhere.
+fn leaf_texture(opaque: impl Fn(u32, u32) -> bool) -> LeafTexture {
+    let n = 32u32;
+    let mut rgba = vec![0u8; (n * n * 4) as usize];
+    for y in 0..n {
+        for x in 0..n {
+            if opaque(x, y) {
+                rgba[((y * n + x) * 4) as usize..][..4].copy_from_slice(&[200, 230, 180, 255]);
+            }
+        }
+    }
+    LeafTexture {
+        width: n,
+        height: n,
+        rgba,
+    }
+}
+
+/// A 7 m "veil": one horizontal 6 m leaf card 7 m up and nothing else, its texture opaque on
+/// one texel of every 2 × 2 (a quarter of it), so any image of it is a quarter opaque.
 pub fn veil_plant() -> Plant {
     let mut leaves = Mesh::default();
     let (s, y) = (3.0, 7.0);
@@ -135,21 +142,10 @@ pub fn veil_plant() -> Plant {
         Vec3::Y,
         [0.12, 0.3, 0.06],
     );
-    let n = 32u32;
-    let mut rgba = vec![0u8; (n * n * 4) as usize];
-    for y in (0..n).step_by(2) {
-        for x in (0..n).step_by(2) {
-            rgba[((y * n + x) * 4) as usize..][..4].copy_from_slice(&[200, 230, 180, 255]);
-        }
-    }
     Plant {
         name: "veil".into(),
         leaves,
-        leaf_texture: LeafTexture {
-            width: n,
-            height: n,
-            rgba,
-        },
+        leaf_texture: leaf_texture(|x, y| x % 2 == 0 && y % 2 == 0),
         bbox_min: [-3.0, 0.0, -3.0],
         bbox_max: [3.0, 7.0, 3.0],
         internodes: 1,

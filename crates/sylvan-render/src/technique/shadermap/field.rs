@@ -86,23 +86,12 @@ impl ForestField {
             })
             .collect();
         let [w, h] = density.resolution;
-        let raster = device.create_texture_with_data(
-            &gpu.queue,
-            &wgpu::TextureDescriptor {
-                label: Some("shadermap_density"),
-                size: wgpu::Extent3d {
-                    width: w,
-                    height: h,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::Rgba16Float,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            },
-            wgpu::util::TextureDataOrder::LayerMajor,
+        let raster = crate::texture::upload_raw(
+            gpu,
+            "shadermap_density",
+            [w, h, 1],
+            wgpu::TextureDimension::D2,
+            wgpu::TextureFormat::Rgba16Float,
             bytemuck::cast_slice(&bits),
         );
         let raster_view = raster.create_view(&Default::default());

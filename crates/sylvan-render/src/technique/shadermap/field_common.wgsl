@@ -25,12 +25,17 @@ struct FieldParams {
 // `field.crowns.xy`.
 @group(FIELD) @binding(5) var field_density_map: texture_2d<f32>;
 
-// The density the tables are looked up at, trees per m², at ground point `xz` for a view at
-// zenith `theta` of the transformed space: the density of the mix's trees whose crowns
-// project along it as much as the local trees' do (`density.rs`: Σ Λⁱ(aⁱ cos θ + sⁱ′ sin θ)
-// / (ā cos θ + s̄′ sin θ), side areas scaled by 2/h); Λ_h where the mix has no crowns.
-fn field_density(xz: vec2<f32>, theta: f32) -> f32 {
-    let t = textureSampleLevel(field_density_map, table_sampler, xz * field.density.yz, 0.0);
+// The field's raster at ground point `xz` (`density.rs`): r Λ_h, g Σ Λⁱ aⁱ, b Σ Λⁱ sⁱ, each
+// over its scale.
+fn field_raster(xz: vec2<f32>) -> vec4<f32> {
+    return textureSampleLevel(field_density_map, table_sampler, xz * field.density.yz, 0.0);
+}
+
+// The density the tables are looked up at, trees per m², from a `field_raster` sample `t`,
+// for a view at zenith `theta` of the transformed space: the density of the mix's trees whose
+// crowns project along it as much as the local trees' do (Σ Λⁱ(aⁱ cos θ + sⁱ′ sin θ) /
+// (ā cos θ + s̄′ sin θ), side areas scaled by 2/h); Λ_h where the mix has no crowns.
+fn field_density(t: vec4<f32>, theta: f32) -> f32 {
     let c = cos(theta);
     let s = sin(theta) * 2.0 / table_info.shape.x;
     let mean = field.crowns.z * c + field.crowns.w * s;
@@ -87,8 +92,9 @@ struct ForestTerms {
 fn forest_terms(xz: vec2<f32>, v: vec3<f32>, l: vec3<f32>, n: vec3<f32>) -> ForestTerms {
     let a = forest_angles(v, l, n);
     // The view's density for what is seen; the sky's (𝔻) at 45°, the cosine-weighted mean.
-    let lambda = field_density(xz, a.theta_v) * a.slope;
-    let lambda_sky = field_density(xz, 0.7853982) * a.slope;
+    let raster = field_raster(xz);
+    let lambda = field_density(raster, a.theta_v) * a.slope;
+    let lambda_sky = field_density(raster, 0.7853982) * a.slope;
     let gt = table_gt(a.theta_v, a.theta_l, a.phi, lambda);
     let dec = vec2<f32>(table_dec(a.theta_v, lambda).x, table_dec(a.theta_v, lambda_sky).y);
     var out: ForestTerms;

@@ -102,23 +102,12 @@ impl GpuTables {
             r.gt.iter()
                 .flat_map(|v| [f32_to_f16(v[0]), f32_to_f16(v[1])])
                 .collect();
-        let gt = device.create_texture_with_data(
-            &gpu.queue,
-            &wgpu::TextureDescriptor {
-                label: Some("shadermap_gt"),
-                size: wgpu::Extent3d {
-                    width: r.phi,
-                    height: r.delta,
-                    depth_or_array_layers: depth,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D3,
-                format: wgpu::TextureFormat::Rg16Float,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            },
-            wgpu::util::TextureDataOrder::LayerMajor,
+        let gt = crate::texture::upload_raw(
+            gpu,
+            "shadermap_gt",
+            [r.phi, r.delta, depth],
+            wgpu::TextureDimension::D3,
+            wgpu::TextureFormat::Rg16Float,
             bytemuck::cast_slice(&gt_bits),
         );
         let (nt, nl) = (t.theta as usize, t.lambdas.len());
@@ -128,23 +117,12 @@ impl GpuTables {
                 dec_bits.extend([f32_to_f16(t.e_node(l, v)), f32_to_f16(t.d[l]), 0, 0]);
             }
         }
-        let dec = device.create_texture_with_data(
-            &gpu.queue,
-            &wgpu::TextureDescriptor {
-                label: Some("shadermap_dec"),
-                size: wgpu::Extent3d {
-                    width: nt as u32,
-                    height: nl as u32,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::Rgba16Float,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            },
-            wgpu::util::TextureDataOrder::LayerMajor,
+        let dec = crate::texture::upload_raw(
+            gpu,
+            "shadermap_dec",
+            [nt as u32, nl as u32, 1],
+            wgpu::TextureDimension::D2,
+            wgpu::TextureFormat::Rgba16Float,
             bytemuck::cast_slice(&dec_bits),
         );
         let mut info = GpuTableInfo {
