@@ -322,18 +322,24 @@ pub(crate) fn parse_scene(text: &str, path: &Path, tree_limit: usize) -> Result<
         t.seed = i as u32;
     }
     let placed = match placement.method {
-        // Tiled worlds are produced tile by tile by the renderer, never all at once here.
-        PlacementMethod::Tiled => SeededForest::new(terrain.size, &layouts, placement.seed, &fixed)
-            .and_then(|forest| {
-                let limit = tree_limit.min(MAX_TREES);
-                if fixed.len() > limit {
-                    return Err(PlacementError::TooManyTrees {
-                        estimated: fixed.len() as f64,
-                        limit: limit as f64,
-                    });
-                }
-                Ok((fixed, forest.map(Arc::new)))
-            }),
+        // Tiled and Wang worlds are produced tile by tile by the renderer, never all at once here.
+        PlacementMethod::Tiled | PlacementMethod::Wang => SeededForest::with_method(
+            terrain.size,
+            &layouts,
+            placement.seed,
+            placement.method,
+            &fixed,
+        )
+        .and_then(|forest| {
+            let limit = tree_limit.min(MAX_TREES);
+            if fixed.len() > limit {
+                return Err(PlacementError::TooManyTrees {
+                    estimated: fixed.len() as f64,
+                    limit: limit as f64,
+                });
+            }
+            Ok((fixed, forest.map(Arc::new)))
+        }),
         PlacementMethod::Poisson => {
             place_trees_within(&terrain, &layouts, &placement, &fixed, tree_limit)
                 .map(|p| (p.trees, None))
@@ -355,7 +361,7 @@ pub(crate) fn parse_scene(text: &str, path: &Path, tree_limit: usize) -> Result<
                     "lower density_per_ha or the terrain's size_m"
                 }
                 PlacementError::TooManyCandidates { .. } => {
-                    "use [placement] method = \"tiled\", or lower the peak density"
+                    "use [placement] method = \"tiled\" or \"wang\", or lower the peak density"
                 }
             };
             return Err(SceneError::new(
@@ -568,11 +574,12 @@ fn build_placement(cx: &Ctx, raw: Option<RawPlacement>) -> Result<Placement, Sce
         p.method = match m.get_ref().as_str() {
             "poisson" => PlacementMethod::Poisson,
             "tiled" => PlacementMethod::Tiled,
+            "wang" => PlacementMethod::Wang,
             other => {
                 return Err(cx.invalid(
                     &m.span(),
                     format!("unknown placement method `{other}`"),
-                    "use \"poisson\" or \"tiled\"",
+                    "use \"poisson\", \"tiled\" or \"wang\"",
                 ));
             }
         };

@@ -20,6 +20,7 @@ mod rng;
 mod species;
 mod terrain;
 mod types;
+mod wang;
 
 pub use csv::{MAX_CSV_BYTES, MAX_CSV_ROWS};
 pub use default::{BUILTIN_SIZE_M, DEFAULT_SUN_COLOR, preset_height_m};
@@ -41,6 +42,7 @@ pub use terrain::{
     ProceduralTerrain,
 };
 pub use types::*;
+pub use wang::WangSet;
 
 /// Entry points for the fuzz targets (`fuzz/`) and their stable-Rust corpus test: each parses
 /// untrusted bytes the way a scene load does and must return, never panic.

@@ -9,27 +9,36 @@
 //! `u·ρ` picks the species by the cumulative local densities — density maps thus modulate both
 //! acceptance and the species mix. Expected count is exactly ∫D over the terrain.
 //!
-//! Under `tiled` placement every candidate draws its numbers from a hash of (seed, tile copy,
-//! point index) rather than from one stream, so the trees of any rectangle can be produced
-//! alone, in any order, and come out identical: [`SeededForest`] produces a world tile by tile,
-//! on demand, in time and memory proportional to the rectangle, never to the world.
+//! Under `tiled` (and `wang`) placement every candidate draws its numbers from a hash of (seed,
+//! tile copy, point index) rather than from one stream, so the trees of any rectangle can be
+//! produced alone, in any order, and come out identical: [`SeededForest`] produces a world tile
+//! by tile, on demand, in time and memory proportional to the rectangle, never to the world.
 //!
-//! Deviation: tiles are repeated without per-tile rotation, since rotating a periodic tile would
-//! break the minimum spacing at tile borders; the random thinning hides the period.
+//! `wang` placement is `tiled` with Poisson-disk Wang tiles (CSHD03) in place of the periodic
+//! tile: 16 tiles of the same side and radius, laid out by a hashed non-periodic tiling, as
+//! BN12 §4 asks ([`crate::WangSet`], `wang.rs`); everything else — thinning, hashing,
+//! [`SeededForest`] — is shared. Its tiles' point counts differ slightly (±0.2 % at the
+//! forest's tile size), so ρ is the 16 tiles' mean and the expected count is ∫D within that.
+//!
+//! Deviation: `tiled` repeats its tile without per-tile rotation, since rotating a periodic tile
+//! would break the minimum spacing at tile borders; the random thinning hides the period (use
+//! `wang` for no period at all).
 
 use crate::rng::{Rng, hash2, mix};
 use crate::terrain::bilinear;
 use crate::types::{Terrain, TreeInstance};
+use crate::wang::WangSet;
 use glam::{Vec2, Vec3};
 use std::fmt;
 
 /// Most trees a scene may place when it is loaded (positions files and `poisson` placement);
-/// `tiled` placement produces its trees tile by tile and is limited by [`MAX_WORLD_TREES`].
+/// `tiled` and `wang` placement produce their trees tile by tile and are limited by
+/// [`MAX_WORLD_TREES`].
 pub const MAX_TREES: usize = 2_000_000;
-/// Most trees a `tiled` world may hold in all (expected count); only the tiles in range are
-/// ever produced.
+/// Most trees a `tiled` or `wang` world may hold in all (expected count); only the tiles in
+/// range are ever produced.
 pub const MAX_WORLD_TREES: f64 = 1e10;
-/// Most candidate points a `poisson` pattern may generate (use `tiled` beyond).
+/// Most candidate points a `poisson` pattern may generate (use `tiled` or `wang` beyond).
 pub const MAX_PATTERN_POINTS: usize = 6_000_000;
 /// Highest accepted density, trees per hectare (one tree per m²).
 pub const MAX_DENSITY_PER_HA: f32 = 10_000.0;
@@ -54,6 +63,9 @@ pub enum PlacementMethod {
     Poisson,
     /// A periodic Poisson tile repeated over the terrain (constant memory).
     Tiled,
+    /// Poisson-disk Wang tiles laid out by a hashed, non-periodic tiling (CSHD03, as BN12 §4
+    /// asks; [`crate::WangSet`]): constant memory like `Tiled`, without its period.
+    Wang,
 }
 
 /// The `[placement]` table.
@@ -234,8 +246,9 @@ pub fn peak_per_ha(layouts: &[SpeciesLayout]) -> f32 {
 }
 
 /// Place `layouts` on `terrain` around the `fixed` trees (e.g. from positions CSVs), which are
-/// kept as given. Same inputs → identical output. Under `tiled` placement this produces the
-/// whole terrain at once (bounded by [`MAX_TREES`]); [`SeededForest`] produces it tile by tile.
+/// kept as given. Same inputs → identical output. Under `tiled` or `wang` placement this
+/// produces the whole terrain at once (bounded by [`MAX_TREES`]); [`SeededForest`] produces it
+/// tile by tile.
 pub fn place_trees(
     terrain: &Terrain,
     layouts: &[SpeciesLayout],
@@ -266,8 +279,10 @@ pub(crate) fn place_trees_within(
     let mut trees = Vec::with_capacity(fixed.len() + (estimated * 1.05) as usize + 16);
     trees.extend_from_slice(fixed);
     let min_spacing_m = match placement.method {
-        PlacementMethod::Tiled => {
-            let Some(forest) = SeededForest::new(size, layouts, placement.seed, fixed)? else {
+        PlacementMethod::Tiled | PlacementMethod::Wang => {
+            let Some(forest) =
+                SeededForest::with_method(size, layouts, placement.seed, placement.method, fixed)?
+            else {
                 return Ok(Placed {
                     trees,
                     min_spacing_m: 0.0,
@@ -376,17 +391,17 @@ impl Thinning<'_> {
     }
 }
 
-/// The density-driven trees of `tiled` placement, produced for any rectangle of the terrain
-/// alone: a periodic Poisson tile repeated over the terrain, each candidate thinned with
-/// numbers hashed from (seed, tile copy, point index). The trees of a rectangle are exactly
-/// those of the whole terrain that fall in it, whatever else was produced before; memory is
-/// the pattern (≈ 2,500 points) plus the fixed trees it must keep clear of.
+/// The density-driven trees of `tiled` or `wang` placement, produced for any rectangle of the
+/// terrain alone: a periodic Poisson tile repeated over the terrain (`tiled`) or Poisson-disk
+/// Wang tiles in a hashed tiling (`wang`), each candidate thinned with numbers hashed from
+/// (seed, tile copy, point index). The trees of a rectangle are exactly those of the whole
+/// terrain that fall in it, whatever else was produced before; memory is the pattern (≈ 2,500
+/// points, 16 tiles of them for `wang`) plus the fixed trees it must keep clear of.
 #[derive(Debug, Clone)]
 pub struct SeededForest {
     size: [f32; 2],
     layouts: Vec<SpeciesLayout>,
-    /// The periodic tile's points, sorted by z.
-    pattern: Vec<Vec2>,
+    pattern: Pattern,
     tile: f32,
     rho: f64,
     radius: f32,
@@ -394,13 +409,35 @@ pub struct SeededForest {
     blockers: SpatialHash,
 }
 
+/// The candidate pattern of a [`SeededForest`].
+#[derive(Debug, Clone)]
+enum Pattern {
+    /// One periodic tile's points, sorted by z.
+    Periodic(Vec<Vec2>),
+    /// Wang tiles, each sorted by z.
+    Wang(WangSet),
+}
+
 impl SeededForest {
-    /// The forest of `layouts` over a terrain of extent `size`, kept clear of `fixed`; `None`
-    /// when no layout has any density.
+    /// The `tiled` forest of `layouts` over a terrain of extent `size`, kept clear of `fixed`;
+    /// `None` when no layout has any density.
     pub fn new(
         size: [f32; 2],
         layouts: &[SpeciesLayout],
         seed: u64,
+        fixed: &[TreeInstance],
+    ) -> Result<Option<Self>, PlacementError> {
+        Self::with_method(size, layouts, seed, PlacementMethod::Tiled, fixed)
+    }
+
+    /// [`SeededForest::new`] with the candidate pattern of `method`: `Wang` for Wang tiles of
+    /// the same side and radius as `Tiled`'s periodic tile; `Tiled` (and `Poisson`, which has
+    /// no per-rectangle form) for the periodic tile.
+    pub fn with_method(
+        size: [f32; 2],
+        layouts: &[SpeciesLayout],
+        seed: u64,
+        method: PlacementMethod,
         fixed: &[TreeInstance],
     ) -> Result<Option<Self>, PlacementError> {
         let estimated = estimate_trees(size, layouts);
@@ -416,9 +453,21 @@ impl SeededForest {
         }
         let radius = pattern_radius_m(peak);
         let tile = (radius * (TILE_POINTS / PATTERN_DENSITY as f32).sqrt()).max(4.0 * radius);
-        let mut pattern = poisson_tile(tile, radius, Rng::new(seed).next_u64());
-        let rho = pattern.len() as f64 / (tile as f64 * tile as f64);
-        pattern.sort_by(|a, b| a.y.total_cmp(&b.y).then(a.x.total_cmp(&b.x)));
+        if method == PlacementMethod::Wang && radius > 1e12 {
+            // A peak density so small (< 1e-24 / m²) that the tiles' squared distances would
+            // overflow f32: under 1e-12 trees expected on the largest terrain, so none.
+            return Ok(None);
+        }
+        let (pattern, rho) = if method == PlacementMethod::Wang {
+            let set = WangSet::new(tile, radius, Rng::new(seed).next_u64());
+            let rho = set.density();
+            (Pattern::Wang(set), rho)
+        } else {
+            let mut pattern = poisson_tile(tile, radius, Rng::new(seed).next_u64());
+            let rho = pattern.len() as f64 / (tile as f64 * tile as f64);
+            pattern.sort_by(|a, b| a.y.total_cmp(&b.y).then(a.x.total_cmp(&b.x)));
+            (Pattern::Periodic(pattern), rho)
+        };
         Ok(Some(Self {
             size,
             layouts: layouts.to_vec(),
@@ -432,6 +481,22 @@ impl SeededForest {
                 radius,
             ),
         }))
+    }
+
+    /// The candidate pattern's method: `Tiled` or `Wang`.
+    pub fn method(&self) -> PlacementMethod {
+        match self.pattern {
+            Pattern::Periodic(_) => PlacementMethod::Tiled,
+            Pattern::Wang(_) => PlacementMethod::Wang,
+        }
+    }
+
+    /// The Wang tiles under `wang` placement (`None` under `tiled`).
+    pub fn wang(&self) -> Option<&WangSet> {
+        match &self.pattern {
+            Pattern::Periodic(_) => None,
+            Pattern::Wang(set) => Some(set),
+        }
     }
 
     /// The density-driven species it places.
@@ -464,7 +529,9 @@ impl SeededForest {
     }
 
     /// Appends the trees in `[min, max)` (x, z) to `out`, in a fixed order (tile copies by row,
-    /// then pattern points by z). Time ∝ the rectangle's area.
+    /// then pattern points by z). Time ∝ the rectangle's area. Under `wang` candidate `j` of
+    /// copy `(tx, ty)` showing tile `t` draws its numbers from
+    /// `hash2(seed ^ mix(t·2¹⁶ + j + 1), tx, ty)` (under `tiled`, `t` = 0).
     pub fn produce(&self, terrain: &Terrain, min: Vec2, max: Vec2, out: &mut Vec<TreeInstance>) {
         let min = min.max(Vec2::ZERO);
         let max = max.min(Vec2::from(self.size));
@@ -484,11 +551,18 @@ impl SeededForest {
         };
         for ty in copies(min.y, max.y) {
             let oz = ty as f32 * self.tile;
-            // The pattern is sorted by z: only the points whose row lies in the rectangle.
-            let first = self.pattern.partition_point(|p| oz + p.y < min.y);
             for tx in copies(min.x, max.x) {
                 let ox = tx as f32 * self.tile;
-                for (j, p) in self.pattern.iter().enumerate().skip(first) {
+                let (t, pattern) = match &self.pattern {
+                    Pattern::Periodic(p) => (0, &p[..]),
+                    Pattern::Wang(set) => {
+                        let t = set.tile_of(tx, ty);
+                        (t as u64, set.points(t))
+                    }
+                };
+                // The pattern is sorted by z: only the points whose row lies in the rectangle.
+                let first = pattern.partition_point(|p| oz + p.y < min.y);
+                for (j, p) in pattern.iter().enumerate().skip(first) {
                     let q = Vec2::new(ox + p.x, oz + p.y);
                     if q.y >= max.y {
                         break;
@@ -496,7 +570,7 @@ impl SeededForest {
                     if q.x < min.x || q.x >= max.x {
                         continue;
                     }
-                    let key = hash2(self.seed ^ mix(j as u64 + 1), tx, ty);
+                    let key = hash2(self.seed ^ mix((t << 16) + j as u64 + 1), tx, ty);
                     let mut rng = Rng::new(key);
                     if let Some(mut t) = thin.consider(terrain, q, &mut rng, &mut local) {
                         t.seed = (key >> 32) as u32;
@@ -527,7 +601,24 @@ pub fn poisson_tile(tile: f32, radius: f32, seed: u64) -> Vec<Vec2> {
 }
 
 fn bridson(size: [f32; 2], radius: f32, seed: u64, periodic: bool) -> Vec<Vec2> {
-    let mut rng = Rng::new(seed);
+    bridson_in(size, radius, &mut Rng::new(seed), periodic, &[], |_| true)
+}
+
+/// Bridson's sampling over `[0, size[0]] × [0, size[1]]` (wrapping around when `periodic`),
+/// conditioned on `fixed` points and restricted to a sub-domain: returns only the NEW points,
+/// each inside `inside` and ≥ `radius` from every other point and every fixed point. The
+/// fixed points must lie in the box and keep the radius among themselves; they seed the
+/// growth (all start active), and when there are none a first point is drawn uniformly in
+/// the domain (up to 64 tries). With no fixed points and `inside` always true this is exactly
+/// [`poisson_disk`] / [`poisson_tile`] (same numbers drawn in the same order).
+pub(crate) fn bridson_in(
+    size: [f32; 2],
+    radius: f32,
+    rng: &mut Rng,
+    periodic: bool,
+    fixed: &[Vec2],
+    inside: impl Fn(Vec2) -> bool,
+) -> Vec<Vec2> {
     let cell_max = radius / std::f32::consts::SQRT_2;
     let n = size.map(|s| ((s / cell_max).ceil() as usize).max(1));
     let cell = [size[0] / n[0] as f32, size[1] / n[1] as f32];
@@ -536,7 +627,7 @@ fn bridson(size: [f32; 2], radius: f32, seed: u64, periodic: bool) -> Vec<Vec2> 
         (radius / cell[1]).ceil() as i64,
     ];
     let mut grid = vec![u32::MAX; n[0] * n[1]];
-    let mut points: Vec<Vec2> = Vec::new();
+    let mut points: Vec<Vec2> = Vec::with_capacity(fixed.len());
     let mut active: Vec<u32> = Vec::new();
     let r2 = radius * radius;
     let cell_of = |p: Vec2| {
@@ -572,14 +663,24 @@ fn bridson(size: [f32; 2], radius: f32, seed: u64, periodic: bool) -> Vec<Vec2> 
         }
         true
     };
-    let first = Vec2::new(rng.f32() * size[0], rng.f32() * size[1]);
     let insert = |p: Vec2, grid: &mut [u32], points: &mut Vec<Vec2>, active: &mut Vec<u32>| {
         let (c, r) = cell_of(p);
         grid[r * n[0] + c] = points.len() as u32;
         active.push(points.len() as u32);
         points.push(p);
     };
-    insert(first, &mut grid, &mut points, &mut active);
+    for &p in fixed {
+        insert(p, &mut grid, &mut points, &mut active);
+    }
+    if fixed.is_empty() {
+        let first = (0..64)
+            .map(|_| Vec2::new(rng.f32() * size[0], rng.f32() * size[1]))
+            .find(|&p| inside(p));
+        let Some(first) = first else {
+            return Vec::new();
+        };
+        insert(first, &mut grid, &mut points, &mut active);
+    }
     // Roberts' variant of Bridson: K candidates evenly spaced on the circle of radius r (+ε)
     // from a random start angle — denser packing, and no trigonometry per candidate.
     let ring: Vec<Vec2> = (0..BRIDSON_K)
@@ -600,7 +701,7 @@ fn bridson(size: [f32; 2], radius: f32, seed: u64, periodic: bool) -> Vec<Vec2> 
             } else if !(0.0..size[0]).contains(&p.x) || !(0.0..size[1]).contains(&p.y) {
                 continue;
             }
-            if fits(p, &grid, &points) {
+            if inside(p) && fits(p, &grid, &points) {
                 insert(p, &mut grid, &mut points, &mut active);
                 found = true;
                 break;
@@ -610,7 +711,7 @@ fn bridson(size: [f32; 2], radius: f32, seed: u64, periodic: bool) -> Vec<Vec2> 
             active.swap_remove(slot);
         }
     }
-    points
+    points.split_off(fixed.len())
 }
 
 /// A uniform grid over points for "anything within r?" queries.

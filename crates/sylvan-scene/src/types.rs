@@ -14,8 +14,8 @@ pub struct Scene {
     /// The trees placed when the scene was loaded (positions files, and every density-driven
     /// tree under `poisson` placement), in load order.
     pub trees: Vec<TreeInstance>,
-    /// The density-driven trees of `tiled` placement, produced for any rectangle on demand
-    /// (never all at once for a large world); `None` under `poisson` placement.
+    /// The density-driven trees of `tiled` or `wang` placement, produced for any rectangle on
+    /// demand (never all at once for a large world); `None` under `poisson` placement.
     pub seeded: Option<std::sync::Arc<crate::placement::SeededForest>>,
     /// The sun.
     pub sun: Sun,

@@ -16,6 +16,7 @@ fn tomlish() -> impl Strategy<Value = String> {
         Just("height_m = [1, 2]\n".to_string()),
         Just("positions = \"nope.csv\"\n".to_string()),
         Just("method = \"tiled\"\n".to_string()),
+        Just("method = \"wang\"\n".to_string()),
         Just("fov_deg = 1e30\n".to_string()),
         Just("elevation_deg = nan\n".to_string()),
         Just("size_m = [0, -1]\n".to_string()),

@@ -38,7 +38,11 @@ fn min_distance(trees: &[TreeInstance]) -> f32 {
 #[test]
 fn density_gives_count_within_ten_percent() {
     let t = Terrain::flat([400.0, 250.0], 5.0);
-    for method in [PlacementMethod::Poisson, PlacementMethod::Tiled] {
+    for method in [
+        PlacementMethod::Poisson,
+        PlacementMethod::Tiled,
+        PlacementMethod::Wang,
+    ] {
         for (per_ha, seed) in [(400.0, 1), (50.0, 2), (1500.0, 3)] {
             let p = Placement { seed, method };
             let n = place_trees(&t, &[layout(0, per_ha)], &p, &[])
@@ -57,7 +61,11 @@ fn density_gives_count_within_ten_percent() {
 #[test]
 fn spacing_holds_across_species() {
     let t = Terrain::procedural(3, [300.0, 200.0], 40.0);
-    for method in [PlacementMethod::Poisson, PlacementMethod::Tiled] {
+    for method in [
+        PlacementMethod::Poisson,
+        PlacementMethod::Tiled,
+        PlacementMethod::Wang,
+    ] {
         let p = Placement { seed: 9, method };
         let placed = place_trees(&t, &[layout(0, 300.0), layout(1, 200.0)], &p, &[]).unwrap();
         assert!(placed.min_spacing_m > 2.0);
