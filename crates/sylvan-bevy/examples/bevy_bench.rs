@@ -41,7 +41,7 @@ fn main() {
     }
     let forest = match &scene_path {
         Some(p) => Forest::load(p),
-        None => Forest::from_scene(sylvan_scene::Scene::builtin_default()),
+        None => Forest::from_scene(sylvan_scene::Scene::builtin_grove()),
     };
     let forest = match forest {
         Ok(f) => f

@@ -8,7 +8,7 @@
 //!
 //! Controls: W/A/S/D move, Q/E down/up, Shift faster, drag with the left mouse button to look
 //! around, Esc quits. `--screenshot PNG` saves the 10th frame and exits (for the README).
-//! With no scene it draws Sylvan's built-in forest.
+//! With no scene it draws Sylvan's built-in grove (`Scene::builtin_grove`: 6,381 trees on 1.28 km of hills).
 
 use bevy::input::mouse::AccumulatedMouseMotion;
 use bevy::prelude::*;
@@ -46,7 +46,7 @@ fn main() {
     let args = args();
     let forest = match &args.scene {
         Some(path) => Forest::load(path),
-        None => Forest::from_scene(sylvan_scene::Scene::builtin_default()),
+        None => Forest::from_scene(sylvan_scene::Scene::builtin_grove()),
     };
     let forest = match forest {
         Ok(f) => f.with_technique(&args.technique).with_layers(Layers::ALL),

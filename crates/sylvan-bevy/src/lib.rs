@@ -218,7 +218,7 @@ impl ForestBuilder {
                 heights.push(height(x, z));
             }
         }
-        let mut scene = Scene::builtin_default();
+        let mut scene = Scene::builtin_grove();
         scene.terrain = sylvan_scene::Terrain {
             size,
             resolution: [nx, nz],

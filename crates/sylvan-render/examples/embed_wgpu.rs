@@ -12,8 +12,8 @@
 //! cargo run --release -p sylvan-render --example embed_wgpu -- [SCENE.toml] [--technique NAME] [--size WxH] [--out PNG]
 //! ```
 //!
-//! With no scene it draws the built-in forest with the `auto` chain and writes
-//! `out/embed_wgpu.png`.
+//! With no scene it draws the built-in grove (`Scene::builtin_grove`) with the `auto` chain and
+//! writes `out/embed_wgpu.png`.
 
 use glam::{Mat4, Vec3};
 use std::path::PathBuf;
@@ -97,7 +97,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let args = parse_args()?;
     let scene = match &args.scene {
         Some(p) => Scene::load(p)?,
-        None => Scene::builtin_default(),
+        None => Scene::builtin_grove(),
     };
     let (width, height) = args.size;
 

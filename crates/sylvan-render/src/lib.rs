@@ -6,7 +6,13 @@
 //! let gpu = sylvan_gpu::Gpu::new()?;
 //! let scene = sylvan_scene::Scene::builtin_default();
 //! let plants = sylvan_render::load_plants(&scene)?;
-//! let options = sylvan_render::RenderOptions { width: 640, height: 360, ..Default::default() };
+//! // `auto`: the scene's LOD chain (the built-in forest: geometry near, the shader-map far).
+//! let options = sylvan_render::RenderOptions {
+//!     width: 640,
+//!     height: 360,
+//!     technique: "auto".into(),
+//!     ..Default::default()
+//! };
 //! let mut renderer = sylvan_render::Renderer::new(&gpu, &scene, &plants, &options)?;
 //! let stats = renderer.render(&gpu, &scene.camera, &scene.sun)?;
 //! let image = renderer.read_image(&gpu)?;

@@ -23,7 +23,10 @@ mod types;
 mod wang;
 
 pub use csv::{MAX_CSV_BYTES, MAX_CSV_ROWS};
-pub use default::{BUILTIN_SIZE_M, DEFAULT_SUN_COLOR, preset_height_m};
+pub use default::{
+    BUILTIN_FOREST_CHAIN, BUILTIN_FOREST_PARAMS, BUILTIN_FOREST_SIZE_M, BUILTIN_SIZE_M,
+    DEFAULT_SUN_COLOR, preset_height_m,
+};
 pub use error::{ErrorKind, Location, SceneError, line_col};
 pub use file::{MAX_COLOR, MAX_ELEVATION_M, MAX_SCENE_BYTES, MAX_SPECIES};
 pub use heightmap::MAX_IMAGE_DIM;

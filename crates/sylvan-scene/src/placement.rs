@@ -453,9 +453,10 @@ impl SeededForest {
         }
         let radius = pattern_radius_m(peak);
         let tile = (radius * (TILE_POINTS / PATTERN_DENSITY as f32).sqrt()).max(4.0 * radius);
-        if method == PlacementMethod::Wang && radius > 1e12 {
-            // A peak density so small (< 1e-24 / m²) that the tiles' squared distances would
-            // overflow f32: under 1e-12 trees expected on the largest terrain, so none.
+        if !radius.is_finite() || radius > 1e12 {
+            // A peak density so small (< 1e-24 / m², or a subnormal one whose radius is
+            // infinite) that the tiles' squared distances would overflow f32 and the sampler
+            // would never finish: under 1e-12 trees expected on the largest terrain, so none.
             return Ok(None);
         }
         let (pattern, rho) = if method == PlacementMethod::Wang {

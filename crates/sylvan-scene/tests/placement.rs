@@ -138,3 +138,21 @@ fn defaults_fill_a_minimal_scene() {
                 .height_at(s.camera.position.x, s.camera.position.z)
     );
 }
+
+#[test]
+fn vanishing_densities_place_nothing_and_finish() {
+    // A density so small that the pattern radius overflows (or is infinite) once made a
+    // `tiled` sampler loop forever, growing memory.
+    let t = Terrain::flat([400.0, 250.0], 5.0);
+    for method in [
+        PlacementMethod::Poisson,
+        PlacementMethod::Tiled,
+        PlacementMethod::Wang,
+    ] {
+        for per_ha in [1e-37f32, 1e-30, f32::MIN_POSITIVE] {
+            let p = Placement { seed: 1, method };
+            let placed = place_trees(&t, &[layout(0, per_ha)], &p, &[]).unwrap();
+            assert!(placed.trees.len() <= 1, "{method:?} {per_ha}/ha");
+        }
+    }
+}

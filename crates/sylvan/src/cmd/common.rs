@@ -10,15 +10,17 @@ use sylvan_scene::{Camera, Scene, Setting, Sun};
 /// Scene and view flags common to the frame commands.
 #[derive(clap::Args, Debug, Clone)]
 pub struct ViewArgs {
-    /// Scene file (TOML). Without it: the built-in default scene.
+    /// Scene file (TOML), or `builtin:forest` / `builtin:grove`. Without it: the built-in
+    /// forest (`builtin:forest`).
     pub scene: Option<PathBuf>,
     /// Output size in pixels, WIDTHxHEIGHT.
     #[arg(long, default_value = "1280x720")]
     pub size: String,
     /// Tree representation: a registered technique (`sylvan params` lists them), or `auto`
-    /// for the scene's LOD chain.
-    #[arg(long, default_value = "geometry")]
-    pub technique: String,
+    /// for the scene's LOD chain [default: `auto` for the built-in forest, `geometry` (the
+    /// reference) for a scene file]
+    #[arg(long)]
+    pub technique: Option<String>,
     /// Samples per pixel (a perfect square; the reference uses 16).
     #[arg(long, default_value_t = 1)]
     pub spp: u32,
@@ -184,19 +186,48 @@ pub fn check_scene_settings(scene: &Scene) -> Result<()> {
     Ok(())
 }
 
-/// Loads the scene (or the built-in one).
+/// A built-in scene named on the command line in place of a scene file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Builtin {
+    /// `builtin:forest`: [`Scene::builtin_default`], the forest to the horizon.
+    Forest,
+    /// `builtin:grove`: [`Scene::builtin_grove`], the small grove of the older benchmarks.
+    Grove,
+}
+
+/// The built-in scene `path` names (`builtin:forest`, `builtin:grove`), if it names one.
+pub fn builtin(path: &Path) -> Option<Builtin> {
+    match path.to_str()? {
+        "builtin:forest" => Some(Builtin::Forest),
+        "builtin:grove" => Some(Builtin::Grove),
+        _ => None,
+    }
+}
+
+/// Loads the scene: a file, a named built-in one, or without a path the built-in forest.
 pub fn load_scene(path: Option<&Path>) -> Result<Scene> {
-    match path {
-        Some(p) => Ok(Scene::load(p)?),
-        None => Ok(Scene::builtin_default()),
+    match path.map(|p| (p, builtin(p))) {
+        None | Some((_, Some(Builtin::Forest))) => Ok(Scene::builtin_default()),
+        Some((_, Some(Builtin::Grove))) => Ok(Scene::builtin_grove()),
+        Some((p, None)) => Ok(Scene::load(p)?),
     }
 }
 
 impl ViewArgs {
+    /// The technique asked for, or the default: `auto` (the chain to the horizon) for the
+    /// built-in forest, `geometry` (the reference) for a scene file.
+    pub fn technique_name(&self) -> &str {
+        match (&self.technique, self.scene.as_deref().map(builtin)) {
+            (Some(t), _) => t,
+            (None, None | Some(Some(Builtin::Forest))) => "auto",
+            (None, Some(_)) => "geometry",
+        }
+    }
+
     /// Validates every flag and loads the scene.
     pub fn resolve(&self) -> Result<Resolved> {
         let (width, height) = parse_size(&self.size)?;
-        let technique = registry::find(&self.technique)?.name.to_string();
+        let technique = registry::find(self.technique_name())?.name.to_string();
         let options = RenderOptions {
             width,
             height,

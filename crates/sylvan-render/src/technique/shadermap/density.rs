@@ -202,7 +202,7 @@ mod tests {
     use sylvan_scene::{Scene, TreeInstance};
 
     fn scene_with(trees: Vec<TreeInstance>, size: f32) -> Scene {
-        let mut s = Scene::builtin_default();
+        let mut s = Scene::builtin_grove();
         s.terrain = sylvan_scene::Terrain::procedural(1, [size, size], 0.0);
         s.trees = trees;
         s.seeded = None;
@@ -317,7 +317,7 @@ mod tests {
 
     #[test]
     fn placed_trees_average_to_the_scene_s_density() {
-        let s = Scene::builtin_default();
+        let s = Scene::builtin_grove();
         // The built-in scene's trees are placed from its maps: the binned density averages
         // to the trees over the area.
         let r = DensityRaster::of_scene(&s, &plants());

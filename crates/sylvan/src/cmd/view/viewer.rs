@@ -321,7 +321,7 @@ mod tests {
 
     #[test]
     fn density_thins_each_species_to_about_its_fraction() {
-        let scene = Scene::builtin_default();
+        let scene = Scene::builtin_grove();
         let species = scene.species.len();
         assert!(species >= 2);
         let mut density = vec![1.0; species];
