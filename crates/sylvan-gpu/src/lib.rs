@@ -17,7 +17,7 @@ pub use context::{Gpu, GpuError, INSTALL_HINT};
 pub use readback::{read_buffer_bytes, read_rgba8, read_texture_bytes};
 pub use resolve::{OUTPUT_FORMAT, RESOLVE_WGSL, Resolver};
 pub use target::{DEPTH_FORMAT, RenderTarget};
-pub use timer::{FrameTimer, TimerKind};
+pub use timer::{FrameTimer, MAX_MARKS, TimerKind};
 pub use wgpu;
 
 /// Creates a shader module from WGSL source, labelled for error messages.

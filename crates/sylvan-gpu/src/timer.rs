@@ -22,12 +22,25 @@ impl TimerKind {
     }
 }
 
-/// Measures the GPU time of one encoder's work. Create once, reuse every frame.
+/// Most marks a [`FrameTimer`] records between its start and end in one frame.
+pub const MAX_MARKS: usize = 8;
+
+/// Timestamps a [`FrameTimer`] holds: start, the marks, end.
+const SLOTS: usize = MAX_MARKS + 2;
+
+/// Measures the GPU time of one encoder's work, and optionally its parts: [`FrameTimer::mark`]
+/// between passes splits the frame (the split is empty with the wall clock). Create once,
+/// reuse every frame.
 pub struct FrameTimer {
     kind: TimerKind,
     queries: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
     period_ns: f64,
     started: Option<Instant>,
+    /// Labels of this frame's marks, in order (`None` outside begin … end).
+    marks: Option<Vec<&'static str>>,
+    /// Labels of the marks of the frame last ended, for `read_ms`.
+    ended: Vec<&'static str>,
+    split: Vec<(&'static str, f64)>,
 }
 
 impl FrameTimer {
@@ -37,17 +50,18 @@ impl FrameTimer {
             let set = gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("frame_timer"),
                 ty: wgpu::QueryType::Timestamp,
-                count: 2,
+                count: SLOTS as u32,
             });
+            let bytes = (SLOTS * 8) as u64;
             let resolve = gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("frame_timer_resolve"),
-                size: 16,
+                size: bytes,
                 usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             });
             let read = gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("frame_timer_read"),
-                size: 16,
+                size: bytes,
                 usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
                 mapped_at_creation: false,
             });
@@ -63,6 +77,9 @@ impl FrameTimer {
             queries,
             period_ns: gpu.queue.get_timestamp_period() as f64,
             started: None,
+            marks: None,
+            ended: Vec::new(),
+            split: Vec::new(),
         }
     }
 
@@ -74,40 +91,71 @@ impl FrameTimer {
     /// Marks the start of the timed work (call first in the encoder).
     pub fn begin(&mut self, encoder: &mut wgpu::CommandEncoder) {
         self.started = Some(Instant::now());
+        self.marks = Some(Vec::new());
         if let Some((set, _, _)) = &self.queries {
             encoder.write_timestamp(set, 0);
         }
     }
 
+    /// Ends the part of the frame called `label` (it began at [`FrameTimer::begin`] or at the
+    /// previous mark); call between passes. Does nothing outside begin … end, with the wall
+    /// clock, or past [`MAX_MARKS`] marks.
+    pub fn mark(&mut self, encoder: &mut wgpu::CommandEncoder, label: &'static str) {
+        let (Some(marks), Some((set, _, _))) = (&mut self.marks, &self.queries) else {
+            return;
+        };
+        if marks.len() < MAX_MARKS {
+            marks.push(label);
+            encoder.write_timestamp(set, marks.len() as u32);
+        }
+    }
+
     /// Marks the end of the timed work (call last in the encoder).
     pub fn end(&mut self, encoder: &mut wgpu::CommandEncoder) {
+        self.ended = self.marks.take().unwrap_or_default();
         if let Some((set, resolve, read)) = &self.queries {
-            encoder.write_timestamp(set, 1);
-            encoder.resolve_query_set(set, 0..2, resolve, 0);
-            encoder.copy_buffer_to_buffer(resolve, 0, read, 0, 16);
+            let n = self.ended.len() as u32 + 2;
+            encoder.write_timestamp(set, n - 1);
+            encoder.resolve_query_set(set, 0..n, resolve, 0);
+            encoder.copy_buffer_to_buffer(resolve, 0, read, 0, n as u64 * 8);
         }
+    }
+
+    /// The parts of the frame last read by [`FrameTimer::read_ms`]: each mark's label and the
+    /// milliseconds from the previous mark (or the start) to it. Empty with the wall clock or
+    /// without marks; the time from the last mark to the end is not in it.
+    pub fn split_ms(&self) -> &[(&'static str, f64)] {
+        &self.split
     }
 
     /// After the encoder was submitted: waits for the GPU and returns the elapsed milliseconds.
     pub fn read_ms(&mut self, gpu: &Gpu) -> Result<f64, GpuError> {
+        self.split.clear();
         let Some((_, _, read)) = &self.queries else {
             gpu.wait()?;
             let start = self.started.take().unwrap_or_else(Instant::now);
             return Ok(start.elapsed().as_secs_f64() * 1e3);
         };
-        let slice = read.slice(..);
+        let n = self.ended.len() + 2;
+        let slice = read.slice(..n as u64 * 8);
         slice.map_async(wgpu::MapMode::Read, |_| {});
         gpu.wait()?;
-        let ticks: [u64; 2] = {
+        let ticks: Vec<u64> = {
             let data = slice
                 .get_mapped_range()
                 .map_err(|e| GpuError::Wgpu(e.to_string()))?;
-            let mut t = [0u64; 2];
-            t[0] = u64::from_le_bytes(data[0..8].try_into().unwrap_or_default());
-            t[1] = u64::from_le_bytes(data[8..16].try_into().unwrap_or_default());
-            t
+            data.chunks_exact(8)
+                .map(|c| u64::from_le_bytes(c.try_into().unwrap_or_default()))
+                .collect()
         };
         read.unmap();
-        Ok(ticks[1].saturating_sub(ticks[0]) as f64 * self.period_ns / 1e6)
+        let ms = |a: u64, b: u64| b.saturating_sub(a) as f64 * self.period_ns / 1e6;
+        self.split = self
+            .ended
+            .iter()
+            .enumerate()
+            .map(|(i, &label)| (label, ms(ticks[i], ticks[i + 1])))
+            .collect();
+        Ok(ms(ticks[0], ticks[n - 1]))
     }
 }

@@ -98,6 +98,11 @@ impl RenderOptions {
 pub struct FrameStats {
     /// Frame time in milliseconds (GPU timestamps, or wall clock).
     pub frame_ms: f64,
+    /// The frame's parts in order, milliseconds (GPU timestamps between passes; empty with
+    /// the wall clock): `prepare` (tile uploads, the GPU cull, the techniques' compute work),
+    /// `shadows` (the cascades), `ground` (sky, terrain and the shader-map's far field),
+    /// `trees` (every band's trees), `resolve` (tone mapping, downsampling).
+    pub split_ms: Vec<(String, f64)>,
     /// CPU milliseconds spent before recording: culling and the technique's per-frame work
     /// (level-of-detail traversal, instance uploads). Not part of `frame_ms`.
     pub cpu_ms: f64,
@@ -179,6 +184,47 @@ struct FrameView {
     view: View,
     view_proj: Mat4,
     pixels_per_metre: f32,
+}
+
+/// Sylvan's own main pass into `hdr`: cleared (`clear`) or loading what an earlier main
+/// pass of the frame stored.
+fn main_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    hdr: &RenderTarget,
+    far_depth: f32,
+    clear: bool,
+) -> wgpu::RenderPass<'e> {
+    let (color, depth) = if clear {
+        (
+            wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+            wgpu::LoadOp::Clear(far_depth),
+        )
+    } else {
+        (wgpu::LoadOp::Load, wgpu::LoadOp::Load)
+    };
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("main_pass"),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: &hdr.color_view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: color,
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: &hdr.depth_view,
+            depth_ops: Some(wgpu::Operations {
+                load: depth,
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: None,
+        }),
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
 }
 
 /// Pixels covered by one metre at one metre's distance, for a vertical field of view of
@@ -525,32 +571,24 @@ impl Renderer {
         let Some(t) = &self.targets else {
             unreachable!("checked above")
         };
-        let mut main_counts = {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("main_pass"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &t.hdr.color_view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &t.hdr.depth_view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(self.frame.target.far_depth()),
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            self.draw(&mut pass, Layers::ALL)
+        self.timer.mark(&mut encoder, "shadows");
+        // The main pass in two (same attachments, the second loads what the first stored), so
+        // the timer can tell the ground and its far field from the trees.
+        let far_depth = self.frame.target.far_depth();
+        let ground = Layers {
+            trees: false,
+            ..Layers::ALL
         };
+        let mut main_counts = self.draw(
+            &mut main_pass(&mut encoder, &t.hdr, far_depth, true),
+            ground,
+        );
+        self.timer.mark(&mut encoder, "ground");
+        main_counts += self.draw(
+            &mut main_pass(&mut encoder, &t.hdr, far_depth, false),
+            Layers::TREES,
+        );
+        self.timer.mark(&mut encoder, "trees");
         self.resolver.encode(
             gpu,
             &mut encoder,
@@ -559,9 +597,16 @@ impl Renderer {
             t.factor,
             self.options.exposure,
         )?;
+        self.timer.mark(&mut encoder, "resolve");
         self.timer.end(&mut encoder);
         gpu.queue.submit([encoder.finish()]);
         let frame_ms = self.timer.read_ms(gpu)?;
+        let split_ms = self
+            .timer
+            .split_ms()
+            .iter()
+            .map(|&(label, ms)| (label.to_string(), ms))
+            .collect();
         gpu.check()?;
         let mut shadow_counts = prepared.shadow;
         let mut world_stats = None;
@@ -595,6 +640,7 @@ impl Renderer {
         Ok(FrameStats {
             technique_stats,
             frame_ms,
+            split_ms,
             cpu_ms: prepared.cpu_ms,
             timer: self.timer.kind(),
             trees_total: match &self.world {
@@ -710,6 +756,9 @@ impl Renderer {
 
         let culled = self.world.as_ref().map(World::culled).unwrap_or_default();
         let mut shadow = DrawCounts::default();
+        // The compute work recorded so far (tile uploads, the GPU cull, the techniques'
+        // per-frame passes) is the frame's first part; a no-op outside `render`.
+        self.timer.mark(encoder, "prepare");
         // With shadows off the maps are never sampled (`sun_dir.w` = 0): skip the passes.
         for c in (0..CASCADES).filter(|_| shadows) {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {

@@ -41,6 +41,13 @@ pub struct Report {
     pub size: [u32; 2],
     pub spp: u32,
     pub frame_ms: Summary,
+    /// The frame's parts (GPU timer only; absent with the wall clock): `prepare` (tile
+    /// uploads, the GPU cull, the techniques' compute work), `shadows` (the cascades),
+    /// `ground` (sky, terrain and the shader-map's far field), `trees` (every band's trees),
+    /// `resolve` (tone mapping and downsampling), each summarised over the frames like
+    /// `frame_ms` — BN12 §9's split of a frame.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub split_ms: BTreeMap<String, Summary>,
     /// CPU time before recording each frame (culling, LOD traversal, uploads), not in `frame_ms`.
     pub cpu_ms: Summary,
     pub timer: &'static str,
@@ -81,6 +88,9 @@ pub struct FrameRecord {
     pub t: f32,
     /// Frame time in milliseconds (the report's `timer`).
     pub ms: f64,
+    /// The frame's parts, milliseconds (as the report's `split_ms`).
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub split_ms: BTreeMap<String, f64>,
     /// CPU milliseconds before recording (as the report's `cpu_ms`).
     pub cpu_ms: f64,
     /// The tiled world's statistics (GPU-driven techniques): tiles produced, waited for, …
@@ -102,6 +112,7 @@ impl FrameRecord {
         Self {
             t,
             ms: stats.frame_ms,
+            split_ms: stats.split_ms.iter().cloned().collect(),
             cpu_ms: stats.cpu_ms,
             world: stats.technique_stats.get("world").cloned(),
             trees_drawn: stats.trees_drawn.clone(),
@@ -130,6 +141,7 @@ impl Report {
             size,
             spp,
             frame_ms: Summary::of(&times),
+            split_ms: split_summaries(frames),
             cpu_ms: Summary::of(&frames.iter().map(|f| f.cpu_ms).collect::<Vec<_>>()),
             timer: last.timer.as_str(),
             trees_total: last.trees_total,
@@ -155,6 +167,20 @@ impl Report {
             per_frame: None,
         }
     }
+}
+
+/// Each part of the frames' split summarised over the frames that have it.
+fn split_summaries(frames: &[FrameStats]) -> BTreeMap<String, Summary> {
+    let mut parts: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+    for f in frames {
+        for (label, ms) in &f.split_ms {
+            parts.entry(label.clone()).or_default().push(*ms);
+        }
+    }
+    parts
+        .into_iter()
+        .map(|(label, ms)| (label, Summary::of(&ms)))
+        .collect()
 }
 
 /// A statistic as JSON: whole numbers as integers.
