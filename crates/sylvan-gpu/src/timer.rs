@@ -36,10 +36,10 @@ pub struct FrameTimer {
     queries: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
     period_ns: f64,
     started: Option<Instant>,
-    /// Labels of this frame's marks, in order (`None` outside begin … end).
-    marks: Option<Vec<&'static str>>,
-    /// Labels of the marks of the frame last ended, for `read_ms`.
-    ended: Vec<&'static str>,
+    /// Labels of the marks of the frame being recorded (or last ended), in order.
+    marks: Vec<&'static str>,
+    /// Between begin and end: marks are taken.
+    open: bool,
     split: Vec<(&'static str, f64)>,
 }
 
@@ -77,9 +77,9 @@ impl FrameTimer {
             queries,
             period_ns: gpu.queue.get_timestamp_period() as f64,
             started: None,
-            marks: None,
-            ended: Vec::new(),
-            split: Vec::new(),
+            marks: Vec::with_capacity(MAX_MARKS),
+            open: false,
+            split: Vec::with_capacity(MAX_MARKS),
         }
     }
 
@@ -91,7 +91,8 @@ impl FrameTimer {
     /// Marks the start of the timed work (call first in the encoder).
     pub fn begin(&mut self, encoder: &mut wgpu::CommandEncoder) {
         self.started = Some(Instant::now());
-        self.marks = Some(Vec::new());
+        self.marks.clear();
+        self.open = true;
         if let Some((set, _, _)) = &self.queries {
             encoder.write_timestamp(set, 0);
         }
@@ -101,20 +102,20 @@ impl FrameTimer {
     /// previous mark); call between passes. Does nothing outside begin … end, with the wall
     /// clock, or past [`MAX_MARKS`] marks.
     pub fn mark(&mut self, encoder: &mut wgpu::CommandEncoder, label: &'static str) {
-        let (Some(marks), Some((set, _, _))) = (&mut self.marks, &self.queries) else {
+        let Some((set, _, _)) = &self.queries else {
             return;
         };
-        if marks.len() < MAX_MARKS {
-            marks.push(label);
-            encoder.write_timestamp(set, marks.len() as u32);
+        if self.open && self.marks.len() < MAX_MARKS {
+            self.marks.push(label);
+            encoder.write_timestamp(set, self.marks.len() as u32);
         }
     }
 
     /// Marks the end of the timed work (call last in the encoder).
     pub fn end(&mut self, encoder: &mut wgpu::CommandEncoder) {
-        self.ended = self.marks.take().unwrap_or_default();
+        self.open = false;
         if let Some((set, resolve, read)) = &self.queries {
-            let n = self.ended.len() as u32 + 2;
+            let n = self.marks.len() as u32 + 2;
             encoder.write_timestamp(set, n - 1);
             encoder.resolve_query_set(set, 0..n, resolve, 0);
             encoder.copy_buffer_to_buffer(resolve, 0, read, 0, n as u64 * 8);
@@ -136,26 +137,27 @@ impl FrameTimer {
             let start = self.started.take().unwrap_or_else(Instant::now);
             return Ok(start.elapsed().as_secs_f64() * 1e3);
         };
-        let n = self.ended.len() + 2;
+        let n = self.marks.len() + 2;
         let slice = read.slice(..n as u64 * 8);
         slice.map_async(wgpu::MapMode::Read, |_| {});
         gpu.wait()?;
-        let ticks: Vec<u64> = {
+        let mut ticks = [0u64; SLOTS];
+        {
             let data = slice
                 .get_mapped_range()
                 .map_err(|e| GpuError::Wgpu(e.to_string()))?;
-            data.chunks_exact(8)
-                .map(|c| u64::from_le_bytes(c.try_into().unwrap_or_default()))
-                .collect()
-        };
+            for (t, c) in ticks.iter_mut().zip(data.chunks_exact(8)) {
+                *t = u64::from_le_bytes(c.try_into().unwrap_or_default());
+            }
+        }
         read.unmap();
         let ms = |a: u64, b: u64| b.saturating_sub(a) as f64 * self.period_ns / 1e6;
-        self.split = self
-            .ended
-            .iter()
-            .enumerate()
-            .map(|(i, &label)| (label, ms(ticks[i], ticks[i + 1])))
-            .collect();
+        self.split.extend(
+            self.marks
+                .iter()
+                .enumerate()
+                .map(|(i, &label)| (label, ms(ticks[i], ticks[i + 1]))),
+        );
         Ok(ms(ticks[0], ticks[n - 1]))
     }
 }

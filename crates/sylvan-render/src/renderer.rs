@@ -102,7 +102,7 @@ pub struct FrameStats {
     /// the wall clock): `prepare` (tile uploads, the GPU cull, the techniques' compute work),
     /// `shadows` (the cascades), `ground` (sky, terrain and the shader-map's far field),
     /// `trees` (every band's trees), `resolve` (tone mapping, downsampling).
-    pub split_ms: Vec<(String, f64)>,
+    pub split_ms: Vec<(&'static str, f64)>,
     /// CPU milliseconds spent before recording: culling and the technique's per-frame work
     /// (level-of-detail traversal, instance uploads). Not part of `frame_ms`.
     pub cpu_ms: f64,
@@ -601,12 +601,7 @@ impl Renderer {
         self.timer.end(&mut encoder);
         gpu.queue.submit([encoder.finish()]);
         let frame_ms = self.timer.read_ms(gpu)?;
-        let split_ms = self
-            .timer
-            .split_ms()
-            .iter()
-            .map(|&(label, ms)| (label.to_string(), ms))
-            .collect();
+        let split_ms = self.timer.split_ms().to_vec();
         gpu.check()?;
         let mut shadow_counts = prepared.shadow;
         let mut world_stats = None;

@@ -119,17 +119,7 @@ impl Scene {
             species("bush", [0.8, 2.2]),
         ];
         let maps: [DensityMap; 4] = density_maps(&terrain, &FOREST_MAPS);
-        let per_ha = [420.0, 320.0, 300.0, 260.0];
-        let layouts: Vec<SpeciesLayout> = maps
-            .into_iter()
-            .zip(per_ha)
-            .enumerate()
-            .map(|(i, (map, max_per_ha))| SpeciesLayout {
-                species: i as u32,
-                height_m: species[i].height_m,
-                density: Density::Map { map, max_per_ha },
-            })
-            .collect();
+        let layouts = layouts_of(&species, maps, [420.0, 320.0, 300.0, 260.0]);
         let seeded = SeededForest::with_method(size, &layouts, 2024, PlacementMethod::Tiled, &[])
             .expect("the built-in forest is within the limits")
             .map(std::sync::Arc::new);
@@ -175,33 +165,8 @@ impl Scene {
             species("prunus", [5.0, 9.0]),
             species("bush", [0.8, 2.2]),
         ];
-        let [pine, prunus, bush] = density_maps(&terrain, &GROVE_MAPS);
-        let layouts = [
-            SpeciesLayout {
-                species: 0,
-                height_m: species[0].height_m,
-                density: Density::Map {
-                    map: pine,
-                    max_per_ha: 36.0,
-                },
-            },
-            SpeciesLayout {
-                species: 1,
-                height_m: species[1].height_m,
-                density: Density::Map {
-                    map: prunus,
-                    max_per_ha: 32.0,
-                },
-            },
-            SpeciesLayout {
-                species: 2,
-                height_m: species[2].height_m,
-                density: Density::Map {
-                    map: bush,
-                    max_per_ha: 12.0,
-                },
-            },
-        ];
+        let maps: [DensityMap; 3] = density_maps(&terrain, &GROVE_MAPS);
+        let layouts = layouts_of(&species, maps, [36.0, 32.0, 12.0]);
         let placement = Placement {
             seed: 2024,
             ..Placement::default()
@@ -225,6 +190,23 @@ impl Scene {
             source: None,
         }
     }
+}
+
+/// One layout per species: its map in [0, 1] scaled to `max_per_ha` at 1.
+fn layouts_of<const N: usize>(
+    species: &[Species],
+    maps: [DensityMap; N],
+    max_per_ha: [f32; N],
+) -> Vec<SpeciesLayout> {
+    maps.into_iter()
+        .zip(max_per_ha)
+        .enumerate()
+        .map(|(i, (map, max_per_ha))| SpeciesLayout {
+            species: i as u32,
+            height_m: species[i].height_m,
+            density: Density::Map { map, max_per_ha },
+        })
+        .collect()
 }
 
 fn species(name: &str, height_m: [f32; 2]) -> Species {

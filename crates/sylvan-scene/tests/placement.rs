@@ -2,11 +2,10 @@
 
 mod common;
 
-use common::scene_file;
+use common::{min_tree_distance, scene_file};
 use glam::Vec3;
 use sylvan_scene::{
-    Density, Placement, PlacementMethod, Scene, SpeciesLayout, Sun, Terrain, TreeInstance,
-    place_trees,
+    Density, Placement, PlacementMethod, Scene, SpeciesLayout, Sun, Terrain, place_trees,
 };
 
 fn layout(species: u32, per_ha: f32) -> SpeciesLayout {
@@ -15,24 +14,6 @@ fn layout(species: u32, per_ha: f32) -> SpeciesLayout {
         height_m: [5.0, 10.0],
         density: Density::PerHectare(per_ha),
     }
-}
-
-fn min_distance(trees: &[TreeInstance]) -> f32 {
-    let mut pts: Vec<Vec3> = trees
-        .iter()
-        .map(|t| Vec3::new(t.position.x, 0.0, t.position.z))
-        .collect();
-    pts.sort_by(|a, b| a.x.total_cmp(&b.x));
-    let mut best = f32::INFINITY;
-    for i in 0..pts.len() {
-        for j in i + 1..pts.len() {
-            if pts[j].x - pts[i].x >= best {
-                break;
-            }
-            best = best.min(pts[i].distance(pts[j]));
-        }
-    }
-    best
 }
 
 #[test]
@@ -70,7 +51,7 @@ fn spacing_holds_across_species() {
         let placed = place_trees(&t, &[layout(0, 300.0), layout(1, 200.0)], &p, &[]).unwrap();
         assert!(placed.min_spacing_m > 2.0);
         assert!(
-            min_distance(&placed.trees) >= placed.min_spacing_m * 0.999,
+            min_tree_distance(&placed.trees) >= placed.min_spacing_m * 0.999,
             "{method:?}"
         );
         let n0 = placed.trees.iter().filter(|t| t.species == 0).count() as f32;

@@ -3,36 +3,11 @@
 
 mod common;
 
-use common::scene_file;
+use common::{scene_file, tree_key, two_species};
 use glam::Vec2;
 use sylvan_scene::{
-    Density, Placement, PlacementMethod, Scene, SeededForest, SpeciesLayout, Terrain, TreeInstance,
-    place_trees,
+    Placement, PlacementMethod, Scene, SeededForest, Terrain, TreeInstance, place_trees,
 };
-
-fn layouts() -> Vec<SpeciesLayout> {
-    vec![
-        SpeciesLayout {
-            species: 0,
-            height_m: [12.0, 20.0],
-            density: Density::PerHectare(300.0),
-        },
-        SpeciesLayout {
-            species: 1,
-            height_m: [5.0, 9.0],
-            density: Density::PerHectare(150.0),
-        },
-    ]
-}
-
-fn key(t: &TreeInstance) -> (u32, u32, u32, u32) {
-    (
-        t.position.x.to_bits(),
-        t.position.z.to_bits(),
-        t.species,
-        t.seed,
-    )
-}
 
 fn produce_tiles(forest: &SeededForest, terrain: &Terrain, tile: f32) -> Vec<TreeInstance> {
     let n = (terrain.size[0] / tile).ceil() as i32;
@@ -59,17 +34,17 @@ fn produce_tiles(forest: &SeededForest, terrain: &Terrain, tile: f32) -> Vec<Tre
 #[test]
 fn any_partition_gives_the_same_trees() {
     let terrain = Terrain::procedural(5, [900.0, 700.0], 60.0);
-    let forest = SeededForest::new(terrain.size, &layouts(), 11, &[])
+    let forest = SeededForest::new(terrain.size, &two_species(), 11, &[])
         .unwrap()
         .unwrap();
     let mut whole = Vec::new();
     forest.produce(&terrain, Vec2::ZERO, Vec2::from(terrain.size), &mut whole);
-    let mut whole_keys: Vec<_> = whole.iter().map(key).collect();
+    let mut whole_keys: Vec<_> = whole.iter().map(tree_key).collect();
     whole_keys.sort_unstable();
     for tile in [64.0, 100.0, 256.0, 333.3] {
         let mut keys: Vec<_> = produce_tiles(&forest, &terrain, tile)
             .iter()
-            .map(key)
+            .map(tree_key)
             .collect();
         keys.sort_unstable();
         assert_eq!(keys, whole_keys, "tiles of {tile} m");
@@ -77,7 +52,7 @@ fn any_partition_gives_the_same_trees() {
     // The eager placement of the same method is the same forest.
     let placed = place_trees(
         &terrain,
-        &layouts(),
+        &two_species(),
         &Placement {
             seed: 11,
             method: PlacementMethod::Tiled,
@@ -99,7 +74,7 @@ fn any_partition_gives_the_same_trees() {
 fn a_tile_costs_its_area_not_the_world() {
     // 100 km²: producing one 256 m tile must not touch the rest of the world.
     let terrain = Terrain::flat([10_000.0, 10_000.0], 0.0);
-    let forest = SeededForest::new(terrain.size, &layouts(), 3, &[])
+    let forest = SeededForest::new(terrain.size, &two_species(), 3, &[])
         .unwrap()
         .unwrap();
     assert!(forest.estimated_trees() > 4.0e6);

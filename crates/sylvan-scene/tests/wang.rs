@@ -5,29 +5,13 @@
 
 mod common;
 
-use common::scene_file;
+use common::{min_distance, scene_file, tree_key, two_species};
 use glam::Vec2;
 use std::time::Instant;
 use sylvan_scene::{
     Density, DensityMap, Placement, PlacementMethod, Scene, SeededForest, SpeciesLayout, Terrain,
-    TreeInstance, WangSet, place_trees, poisson_tile,
+    WangSet, place_trees, poisson_tile,
 };
-
-/// Smallest distance between two points of `points` (sweep along x).
-fn min_distance(points: &[Vec2]) -> f32 {
-    let mut sorted = points.to_vec();
-    sorted.sort_by(|a, b| a.x.total_cmp(&b.x));
-    let mut best = f32::INFINITY;
-    for i in 0..sorted.len() {
-        for j in i + 1..sorted.len() {
-            if sorted[j].x - sorted[i].x >= best {
-                break;
-            }
-            best = best.min(sorted[i].distance(sorted[j]));
-        }
-    }
-    best
-}
 
 /// Smallest distance between a point of `a` and a point of `b`.
 fn cross_distance(a: &[Vec2], b: &[Vec2]) -> f32 {
@@ -176,30 +160,6 @@ fn tile_indices(set: &WangSet, n: i64) -> Vec<Vec<usize>> {
         .collect()
 }
 
-fn layouts() -> Vec<SpeciesLayout> {
-    vec![
-        SpeciesLayout {
-            species: 0,
-            height_m: [12.0, 20.0],
-            density: Density::PerHectare(300.0),
-        },
-        SpeciesLayout {
-            species: 1,
-            height_m: [5.0, 9.0],
-            density: Density::PerHectare(150.0),
-        },
-    ]
-}
-
-fn key(t: &TreeInstance) -> (u32, u32, u32, u32) {
-    (
-        t.position.x.to_bits(),
-        t.position.z.to_bits(),
-        t.species,
-        t.seed,
-    )
-}
-
 #[test]
 fn wang_tiling_is_aperiodic_and_deterministic() {
     let set = WangSet::new(60.0, 2.5, 3);
@@ -265,14 +225,14 @@ fn wang_tiling_is_aperiodic_and_deterministic() {
 fn a_wang_forest_is_produced_per_rectangle() {
     let terrain = Terrain::procedural(5, [900.0, 700.0], 60.0);
     let forest =
-        SeededForest::with_method(terrain.size, &layouts(), 11, PlacementMethod::Wang, &[])
+        SeededForest::with_method(terrain.size, &two_species(), 11, PlacementMethod::Wang, &[])
             .unwrap()
             .unwrap();
     assert_eq!(forest.method(), PlacementMethod::Wang);
     let side = forest.wang().expect("Wang tiles").side();
     let mut whole = Vec::new();
     forest.produce(&terrain, Vec2::ZERO, Vec2::from(terrain.size), &mut whole);
-    let mut whole_keys: Vec<_> = whole.iter().map(key).collect();
+    let mut whole_keys: Vec<_> = whole.iter().map(tree_key).collect();
     whole_keys.sort_unstable();
     // Rectangles straddling Wang tile edges and corners: exactly the whole forest's trees there.
     for (min, max) in [
@@ -285,20 +245,23 @@ fn a_wang_forest_is_produced_per_rectangle() {
     ] {
         let mut part = Vec::new();
         forest.produce(&terrain, min, max, &mut part);
-        let mut keys: Vec<_> = part.iter().map(key).collect();
+        let mut keys: Vec<_> = part.iter().map(tree_key).collect();
         keys.sort_unstable();
         let inside: Vec<_> = whole
             .iter()
             .filter(|t| {
                 (min.x..max.x).contains(&t.position.x) && (min.y..max.y).contains(&t.position.z)
             })
-            .map(key)
+            .map(tree_key)
             .collect::<std::collections::BTreeSet<_>>()
             .into_iter()
             .collect();
         assert!(!keys.is_empty());
         assert_eq!(keys, inside, "rectangle {min} – {max}");
-        assert_eq!(part.iter().map(key).collect::<Vec<_>>().len(), keys.len());
+        assert_eq!(
+            part.iter().map(tree_key).collect::<Vec<_>>().len(),
+            keys.len()
+        );
     }
     // A partition into 100 m squares gives the whole forest.
     let mut tiles = Vec::new();
@@ -308,13 +271,13 @@ fn a_wang_forest_is_produced_per_rectangle() {
             forest.produce(&terrain, min, min + 100.0, &mut tiles);
         }
     }
-    let mut keys: Vec<_> = tiles.iter().map(key).collect();
+    let mut keys: Vec<_> = tiles.iter().map(tree_key).collect();
     keys.sort_unstable();
     assert_eq!(keys, whole_keys);
     // The eager placement of the same method is the same forest.
     let placed = place_trees(
         &terrain,
-        &layouts(),
+        &two_species(),
         &Placement {
             seed: 11,
             method: PlacementMethod::Wang,
@@ -336,7 +299,7 @@ fn a_wang_forest_is_produced_per_rectangle() {
         whole.len()
     );
     // Not the tiled forest.
-    let tiled = SeededForest::new(terrain.size, &layouts(), 11, &[])
+    let tiled = SeededForest::new(terrain.size, &two_species(), 11, &[])
         .unwrap()
         .unwrap();
     let mut t = Vec::new();

@@ -112,7 +112,11 @@ impl FrameRecord {
         Self {
             t,
             ms: stats.frame_ms,
-            split_ms: stats.split_ms.iter().cloned().collect(),
+            split_ms: stats
+                .split_ms
+                .iter()
+                .map(|&(label, ms)| (label.to_string(), ms))
+                .collect(),
             cpu_ms: stats.cpu_ms,
             world: stats.technique_stats.get("world").cloned(),
             trees_drawn: stats.trees_drawn.clone(),
@@ -174,7 +178,7 @@ fn split_summaries(frames: &[FrameStats]) -> BTreeMap<String, Summary> {
     let mut parts: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     for f in frames {
         for (label, ms) in &f.split_ms {
-            parts.entry(label.clone()).or_default().push(*ms);
+            parts.entry(label.to_string()).or_default().push(*ms);
         }
     }
     parts
