@@ -23,7 +23,7 @@ impl TimerKind {
 }
 
 /// Most marks a [`FrameTimer`] records between its start and end in one frame.
-pub const MAX_MARKS: usize = 8;
+pub const MAX_MARKS: usize = 12;
 
 /// Timestamps a [`FrameTimer`] holds: start, the marks, end.
 const SLOTS: usize = MAX_MARKS + 2;

@@ -192,6 +192,153 @@ pub fn fit_cascades(
     })
 }
 
+/// How far along the sun's rays a tree's shadow can fall before the terrain stops it (metres).
+///
+/// A caster point stands at most `tallest` above its trunk's ground and `crown` beside the
+/// trunk. Along a ray descending at the sun's elevation `e` the ground can fall at most
+/// `slope` (rise over run, [`sylvan_scene::Terrain::max_slope`]), so where `tan e > slope` the
+/// ray is under the terrain after `(tallest + slope · crown) / (sin e − slope · cos e)` and
+/// stays there (it falls faster than any slope): whatever lies farther is in the terrain's own
+/// shadow. Lower suns use the whole relief: `caster_reach` (relief + tallest + margin) over
+/// `sin e`. One metre of margin.
+pub fn shadow_reach(sun: Vec3, tallest: f32, crown: f32, slope: f32, caster_reach: f32) -> f32 {
+    let sin_e = sun.normalize_or(Vec3::Y).y.max(1e-3);
+    let cos_e = (1.0 - sin_e * sin_e).max(0.0).sqrt();
+    let whole = caster_reach / sin_e;
+    let falls = sin_e - slope * cos_e;
+    if falls > 1e-3 {
+        whole.min((tallest + slope * crown) / falls + 1.0)
+    } else {
+        whole
+    }
+}
+
+/// Which shadow casters can darken something the camera sees, per cascade.
+///
+/// A cascade shades the receivers whose distance from the eye falls in its shell
+/// (`cascade_index` in `frame.wgsl`: from the previous cascade's far to its own) and that the
+/// camera sees (inside its side and near planes). A caster matters to the cascade only if its
+/// shadow — the segment from it away from the sun, as long as a shadow can fall before the
+/// lowest terrain stops it — meets that region. Everything is padded by the caster's radius
+/// (it may stand anywhere in its sphere), by how far a receiver's shadow lookup strays from its
+/// visible surface (a tree's radius: techniques look up at points inside their bounds; the
+/// normal offset; 2 texels of PCF and bilinear comparison) and 1 m, so culling by this changes
+/// no pixel. The GPU cull (`world/cull.wgsl`, `caster_keeps`) evaluates the same formula from
+/// [`CasterCull::gpu_rows`].
+#[derive(Debug, Clone, Copy)]
+pub struct CasterCull {
+    /// Per cascade: the camera's 4 side planes and its near plane, pushed out by the
+    /// cascade's padding (inward normals, as [`Frustum::planes`]).
+    planes: [[Vec4; 5]; CASCADES],
+    /// Per cascade: x inner and y outer radius of its shell (padded), z the padding.
+    shell: [Vec4; CASCADES],
+    /// Unit vector towards the sun.
+    sun: Vec3,
+    /// How far from a caster its shadow can fall (metres along the sun's rays).
+    reach: f32,
+    /// The eye.
+    eye: Vec3,
+}
+
+impl CasterCull {
+    /// Rows in [`CasterCull::gpu_rows`]: 6 per cascade (5 planes and the shell), then the sun
+    /// (xyz) and the reach (w).
+    pub const GPU_ROWS: usize = 6 * CASCADES + 1;
+
+    /// The cull for the camera `view` (its clip matrix `view_proj`), `cascades` as fitted for
+    /// it, the unit `sun` direction and a shadow `reach` in metres along the sun's rays.
+    /// `receiver_pad` is how far from its visible surface a receiver's shadow lookup may be
+    /// (the largest tree radius); `resolution` the shadow maps' texels per side.
+    pub fn new(
+        view: &View,
+        view_proj: Mat4,
+        cascades: &[Cascade; CASCADES],
+        sun: Vec3,
+        reach: f32,
+        receiver_pad: f32,
+        resolution: u32,
+    ) -> Self {
+        let camera = Frustum::from_matrix(view_proj);
+        let forward = (view.target - view.eye).normalize_or(Vec3::NEG_Z);
+        let near_plane = forward.extend(-forward.dot(view.eye) - view.near);
+        let mut planes = [[Vec4::ZERO; 5]; CASCADES];
+        let mut shell = [Vec4::ZERO; CASCADES];
+        let mut inner = 0.0;
+        for (c, cascade) in cascades.iter().enumerate() {
+            // An orthographic cascade maps 2 / |row x| metres onto its resolution.
+            let m = cascade.view_proj;
+            let row_x = Vec3::new(m.x_axis.x, m.y_axis.x, m.z_axis.x).length();
+            let texel = 2.0 / row_x.max(1e-9) / resolution.max(1) as f32;
+            // Receivers look up at `world + normal_offset · (cascade + 1)`, |offset| ≤ 0.15.
+            let pad = receiver_pad + 2.0 * texel + 0.15 * (c + 1) as f32 + 1.0;
+            let side = &camera.planes()[..4];
+            for (k, p) in side.iter().chain([&near_plane]).enumerate() {
+                planes[c][k] = *p + Vec4::new(0.0, 0.0, 0.0, pad);
+            }
+            shell[c] = Vec4::new(inner - pad, cascade.far + pad, pad, 0.0);
+            inner = cascade.far;
+        }
+        Self {
+            planes,
+            shell,
+            sun: sun.normalize_or(Vec3::Y),
+            reach: reach.max(0.0),
+            eye: view.eye,
+        }
+    }
+
+    /// Whether a caster inside the sphere (`centre`, `radius`) may shade a receiver that
+    /// cascade `cascade` serves.
+    pub fn keeps(&self, cascade: usize, centre: Vec3, radius: f32) -> bool {
+        let s = self.sun;
+        // Points of the shadow segment: centre − t · sun, t from −radius (the caster's far
+        // side) to the reach (+ 2 radii: casters may push their depth away from the sun).
+        let (mut t0, mut t1) = (-radius, self.reach + 2.0 * radius);
+        for p in &self.planes[cascade] {
+            let a = p.truncate().dot(centre) + p.w + radius;
+            let b = p.truncate().dot(s);
+            if b > 0.0 {
+                t1 = t1.min(a / b);
+            } else if b < 0.0 {
+                t0 = t0.max(a / b);
+            } else if a < 0.0 {
+                return false;
+            }
+        }
+        if t0 > t1 {
+            return false;
+        }
+        // The shell: the part of the segment inside the planes must come within the outer
+        // radius and reach beyond the inner one (its distance from the eye is continuous).
+        let shell = self.shell[cascade];
+        let d = centre - self.eye;
+        let nearest = d.dot(s).clamp(t0, t1);
+        let min_distance = (d - s * nearest).length();
+        let max_distance = (d - s * t0).length().max((d - s * t1).length());
+        min_distance <= shell.y + radius && max_distance >= shell.x - radius
+    }
+
+    /// The cull as the GPU cull's uniform rows (see [`CasterCull::GPU_ROWS`]): per cascade its
+    /// 5 planes and the shell (x inner, y outer), then the sun (xyz) and the reach (w); the
+    /// eye is the cull's own `eye_far`.
+    pub fn gpu_rows(&self) -> [[f32; 4]; Self::GPU_ROWS] {
+        let mut rows = [[0.0; 4]; Self::GPU_ROWS];
+        for c in 0..CASCADES {
+            for (k, p) in self.planes[c].iter().enumerate() {
+                rows[6 * c + k] = p.to_array();
+            }
+            rows[6 * c + 5] = self.shell[c].to_array();
+        }
+        rows[6 * CASCADES] = self.sun.extend(self.reach).to_array();
+        rows
+    }
+
+    /// The eye the shells are centred on.
+    pub fn eye(&self) -> Vec3 {
+        self.eye
+    }
+}
+
 /// The group-0 layouts, the shadow-map array and its sampler: made once per renderer.
 pub struct FrameResources {
     /// Layout for main passes: frame uniforms, shadow maps, comparison sampler.
@@ -465,5 +612,109 @@ impl DebugView {
             DebugView::Cascades => 2.0,
             DebugView::Coverage => 3.0,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small deterministic generator (xorshift) for the property tests.
+    struct Rng(u64);
+    impl Rng {
+        fn unit(&mut self) -> f32 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            (self.0 >> 40) as f32 / (1u64 << 24) as f32
+        }
+        fn range(&mut self, lo: f32, hi: f32) -> f32 {
+            lo + (hi - lo) * self.unit()
+        }
+    }
+
+    fn view() -> View {
+        View {
+            eye: Vec3::new(10.0, 40.0, -5.0),
+            target: Vec3::new(300.0, 0.0, 200.0),
+            fov_y: 50f32.to_radians(),
+            aspect: 16.0 / 9.0,
+            near: 0.1,
+            far: 5000.0,
+        }
+    }
+
+    /// Every caster standing on the sun's side of a visible receiver, within the reach, is
+    /// kept by the cascade that shades the receiver — for suns high, low, behind and in front.
+    #[test]
+    fn caster_cull_keeps_every_caster_that_shades_a_visible_receiver() {
+        let view = view();
+        let view_proj = view.view_proj();
+        let camera = Frustum::from_matrix(view_proj);
+        let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+        for (azimuth, elevation) in [(0.0f32, 40.0f32), (140.0, 12.0), (200.0, 70.0), (90.0, 5.0)] {
+            let (a, e) = (azimuth.to_radians(), elevation.to_radians());
+            let sun = Vec3::new(a.sin() * e.cos(), e.sin(), a.cos() * e.cos());
+            let cascades = fit_cascades(&view, sun, 1500.0, 400.0, 2048);
+            let reach = shadow_reach(sun, 30.0, 8.0, 0.3, 400.0);
+            let cull = CasterCull::new(&view, view_proj, &cascades, sun, reach, 12.0, 2048);
+            let mut checked = 0;
+            while checked < 4000 {
+                // A receiver the camera sees, and the cascade that shades it.
+                let x = Vec3::new(rng.range(-2.0, 2.0), rng.range(-2.0, 2.0), 0.0);
+                let p = view.eye
+                    + (view.target - view.eye).normalize() * rng.range(0.2, 1600.0)
+                    + x * rng.range(0.0, 600.0);
+                let d = p.distance(view.eye);
+                if !camera.intersects_sphere(p, 0.0) || d >= cascades[CASCADES - 1].far {
+                    continue;
+                }
+                let c = cascades.iter().position(|k| d < k.far).unwrap();
+                // A caster towards the sun, its sphere anywhere around the ray.
+                let r = rng.range(0.5, 12.0);
+                let off = Vec3::new(
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                )
+                .clamp_length_max(1.0)
+                    * r;
+                let centre = p + sun * rng.range(0.0, reach) + off;
+                assert!(
+                    cull.keeps(c, centre, r),
+                    "sun {azimuth},{elevation}: cascade {c} drops the caster at {centre} (r {r}) of {p}"
+                );
+                checked += 1;
+            }
+        }
+    }
+
+    /// The cull does cull: casters beside the view, behind the eye away from the sun or past
+    /// the reach are dropped, and a cascade drops casters of the other cascades' shells.
+    #[test]
+    fn caster_cull_drops_casters_that_shade_nothing_seen() {
+        let view = view();
+        let sun = Vec3::new(0.3, 0.8, -0.5).normalize();
+        let cascades = fit_cascades(&view, sun, 1500.0, 400.0, 2048);
+        let cull = CasterCull::new(&view, view.view_proj(), &cascades, sun, 300.0, 12.0, 2048);
+        let forward = (view.target - view.eye).normalize();
+        // Far behind the eye.
+        assert!(!cull.keeps(0, view.eye - forward * 800.0 - sun * 50.0, 5.0));
+        // Below the eye, its shadow falling out of the view.
+        assert!(!cull.keeps(0, view.eye - Vec3::Y * 30.0, 5.0));
+        // The far cascade does not need a caster over a point 20 m ahead: its shadow falls
+        // 300 m at most, short of the far cascade's shell.
+        let near = view.eye + forward * 20.0 + sun * 10.0;
+        assert!(cull.keeps(0, near, 5.0));
+        assert!(!cull.keeps(CASCADES - 1, near, 5.0));
+        // A caster far past the reach, on the sun's side of a seen point.
+        let seen = view.eye + forward * 100.0;
+        assert!(cull.keeps(0, seen + sun * 250.0, 5.0));
+        assert!(!cull.keeps(0, seen + sun * 2000.0, 5.0));
+        // How far shadows fall: the whole relief for a low sun, less on gentle slopes.
+        let high = Vec3::new(0.0, 1.0, 1.0).normalize();
+        assert!(shadow_reach(high, 30.0, 8.0, 0.2, 400.0) < 400.0 / high.y);
+        let low = Vec3::new(0.0, 0.1, 1.0).normalize();
+        assert!((shadow_reach(low, 30.0, 8.0, 0.2, 400.0) - 400.0 / low.y).abs() < 0.1);
     }
 }

@@ -2,7 +2,7 @@
 //! cascade on the CPU and written, grouped by pass and species, into one persistent buffer.
 //! Nothing is allocated per frame: the CPU staging vector and the buffer are sized once.
 
-use crate::frame::{CASCADES, Cascade, Frustum};
+use crate::frame::{CASCADES, Cascade, CasterCull, Frustum};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use std::ops::Range;
@@ -123,7 +123,8 @@ impl Instances {
         }
     }
 
-    /// Culls against the view frustum and each cascade, and uploads the survivors.
+    /// Culls against the view frustum and, with shadows, each cascade (and the caster cull,
+    /// when given), and uploads the survivors.
     pub fn update(
         &mut self,
         gpu: &Gpu,
@@ -131,6 +132,7 @@ impl Instances {
         eye: Vec3,
         far: f32,
         cascades: Option<&[Cascade; CASCADES]>,
+        casters: Option<&CasterCull>,
     ) {
         self.staging.clear();
         self.ids.clear();
@@ -153,7 +155,10 @@ impl Instances {
                 let start = self.staging.len() as u32;
                 if let Some(clip) = &clip {
                     for (i, p) in self.placed.iter().enumerate() {
-                        if p.species == species && clip.intersects_sphere(p.centre, p.radius) {
+                        if p.species == species
+                            && clip.intersects_sphere(p.centre, p.radius)
+                            && casters.is_none_or(|k| k.keeps(c, p.centre, p.radius))
+                        {
                             self.staging.push(p.gpu);
                             self.ids.push(i as u32);
                         }

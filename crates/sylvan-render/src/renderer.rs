@@ -57,6 +57,10 @@ pub struct RenderOptions {
     /// Feed even a GPU-driven technique from CPU-culled lists of every tree, placed before the
     /// first frame (the frame as it was before the tiled world; for comparisons).
     pub cpu_driven: bool,
+    /// Draw into each cascade only the casters whose shadow can reach what the camera sees
+    /// ([`frame::CasterCull`]); off: every caster in the cascade's box (for comparisons — the
+    /// pictures are the same).
+    pub caster_cull: bool,
 }
 
 impl Default for RenderOptions {
@@ -75,6 +79,7 @@ impl Default for RenderOptions {
             settings: Vec::new(),
             cache: CachePolicy::Default,
             cpu_driven: false,
+            caster_cull: true,
         }
     }
 }
@@ -267,8 +272,22 @@ pub struct Renderer {
     scene_sky: sylvan_scene::Sky,
     fog_half: f32,
     far: f32,
+    /// How far towards the sun casters may stand above the lowest receiver (terrain relief +
+    /// tallest tree + 50 m): the cascades' depth, and with the sun's elevation the shadows'
+    /// reach for the caster cull.
     caster_reach: f32,
+    /// The largest tree's bounding radius (m): how far a receiver's shadow lookup may stray
+    /// from its visible surface (the caster cull pads by it).
+    receiver_pad: f32,
+    /// The tallest tree (m), how far a tree reaches beside its trunk (m) and the terrain's
+    /// steepest slope: with the sun's elevation, how far shadows fall ([`frame::shadow_reach`]).
+    tallest: f32,
+    crown: f32,
+    slope: f32,
 }
+
+/// The frame split's label of each shadow cascade's pass.
+const SHADOW_MARKS: [&str; CASCADES] = ["shadow0", "shadow1", "shadow2", "shadow3"];
 
 /// Loads each species' plant (presets by name, files by path), in species order.
 pub fn load_plants(scene: &Scene) -> Result<Vec<Plant>, RenderError> {
@@ -478,6 +497,19 @@ impl Renderer {
             far,
             cover,
             caster_reach: (hi - lo) + tallest + 50.0,
+            receiver_pad: bounds
+                .iter()
+                .map(|b| (b.max - b.min).length() * 0.5 / b.max.y.max(1e-3) * tallest)
+                .fold(1.0, f32::max),
+            tallest,
+            crown: bounds
+                .iter()
+                .map(|b| {
+                    let side = b.min.abs().max(b.max.abs());
+                    side.x.hypot(side.z) / b.max.y.max(1e-3) * tallest
+                })
+                .fold(0.0, f32::max),
+            slope: t.max_slope(),
             options: options.clone(),
         };
         Ok(renderer)
@@ -571,7 +603,6 @@ impl Renderer {
         let Some(t) = &self.targets else {
             unreachable!("checked above")
         };
-        self.timer.mark(&mut encoder, "shadows");
         // The main pass in two (same attachments, the second loads what the first stored), so
         // the timer can tell the ground and its far field from the trees.
         let far_depth = self.frame.target.far_depth();
@@ -698,6 +729,24 @@ impl Renderer {
             *f = shadows.then(|| Frustum::from_matrix(c.view_proj));
         }
         self.terrain.cull(&frustums);
+        // Casters whose shadow cannot reach a receiver the camera sees are not drawn.
+        let casters = (shadows && self.options.caster_cull).then(|| {
+            frame::CasterCull::new(
+                view,
+                fv.view_proj,
+                &cascades,
+                sun_dir,
+                frame::shadow_reach(
+                    sun_dir,
+                    self.tallest,
+                    self.crown,
+                    self.slope,
+                    self.caster_reach,
+                ),
+                self.receiver_pad,
+                self.frame.shadow_resolution,
+            )
+        });
         let cover_range = self.far.min(view.far);
         self.cover.prepare(gpu, view.eye, cover_range, &frustum);
         let windows = match self.world {
@@ -712,6 +761,7 @@ impl Renderer {
                 eye: view.eye,
                 far: view.far,
                 frustums: &frustums,
+                casters: casters.as_ref(),
             };
             world.prepare(gpu, encoder, &wv)?;
         } else {
@@ -721,6 +771,7 @@ impl Renderer {
                 view.eye,
                 view.far,
                 shadows.then_some(&cascades),
+                casters.as_ref(),
             );
         }
 
@@ -754,8 +805,13 @@ impl Renderer {
         // The compute work recorded so far (tile uploads, the GPU cull, the techniques'
         // per-frame passes) is the frame's first part; a no-op outside `render`.
         self.timer.mark(encoder, "prepare");
-        // With shadows off the maps are never sampled (`sun_dir.w` = 0): skip the passes.
-        for c in (0..CASCADES).filter(|_| shadows) {
+        // With shadows off the maps are never sampled (`sun_dir.w` = 0): skip the passes (each
+        // cascade's mark is still taken, so every frame has the same parts).
+        for (c, &mark) in SHADOW_MARKS.iter().enumerate() {
+            if !shadows {
+                self.timer.mark(encoder, mark);
+                continue;
+            }
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("shadow_pass"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -763,7 +819,12 @@ impl Renderer {
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        // Opaque where no caster is: such a texel's depth (1) shadows nothing,
+                        // and `sun_visibility` reads one texel's opacity for a tap whose
+                        // bilinear compare also weighs its neighbours — an empty texel must
+                        // not lighten their shadow (it did with 0: the edges of shadows
+                        // depended on casters behind the receiver).
+                        load: wgpu::LoadOp::Clear(wgpu::Color::WHITE),
                         store: wgpu::StoreOp::Store,
                     },
                 })],
@@ -791,6 +852,8 @@ impl Renderer {
                 culled: &culled,
             };
             shadow += self.technique.draw(&mut pass, &ctx);
+            drop(pass);
+            self.timer.mark(encoder, mark);
         }
         Ok(PreparedFrame { cpu_ms, shadow })
     }

@@ -220,3 +220,59 @@ fn each_pass_draws_only_the_terrain_it_sees() {
     );
     assert_eq!(far.triangles, grid, "from above the whole grid is in view");
 }
+
+/// The shadow-caster cull (`frame::CasterCull`) changes no pixel and draws fewer casters:
+/// for the sun behind, in front and low in front (long shadows towards the eye; here casters
+/// under the eye, whose shadows fall out of the view, changed the edges of visible shadows
+/// while the opacity layer was cleared to 0), on the GPU-driven and the CPU-listed frame.
+#[test]
+fn caster_cull_changes_no_pixel_and_draws_fewer_casters() {
+    let gpu = gpu();
+    let world = sylvan_scene::World {
+        tile_m: 64.0,
+        ..Default::default()
+    };
+    let mut s = forest_scene(300.0, 60.0, world);
+    for (azimuth, elevation) in [(135.0, 35.0), (-45.0, 50.0), (60.0, 12.0)] {
+        s.sun = sun(azimuth, elevation);
+        for cpu_driven in [false, true] {
+            let shot = |caster_cull: bool| {
+                let options = RenderOptions {
+                    width: 128,
+                    height: 128,
+                    shadow_resolution: 512,
+                    cpu_driven,
+                    caster_cull,
+                    technique: "geometry".into(),
+                    cache: sylvan_render::bake::CachePolicy::Off,
+                    ..Default::default()
+                };
+                let mut r = Renderer::new(&gpu, &s, &[test_tree()], &options).expect("renderer");
+                let stats = r.render(&gpu, &s.camera, &s.sun).expect("frame");
+                let img = image::DynamicImage::ImageRgba8(r.read_image(&gpu).unwrap()).into_rgb8();
+                (img, stats)
+            };
+            let (all, all_stats) = shot(false);
+            let (culled, culled_stats) = shot(true);
+            let what = format!("sun {azimuth},{elevation}, cpu_driven {cpu_driven}");
+            eprintln!(
+                "{what}: shadow triangles {} of {}",
+                culled_stats.shadow_triangles, all_stats.shadow_triangles
+            );
+            assert!(
+                culled_stats.shadow_triangles < all_stats.shadow_triangles,
+                "{what}: {} of {}",
+                culled_stats.shadow_triangles,
+                all_stats.shadow_triangles
+            );
+            assert_eq!(culled_stats.triangles, all_stats.triangles, "{what}");
+            // Opaque casters: the shadow maps agree wherever a visible receiver looks.
+            let differ = all
+                .pixels()
+                .zip(culled.pixels())
+                .filter(|(a, b)| a != b)
+                .count();
+            assert_eq!(differ, 0, "{what}: {differ} pixels differ");
+        }
+    }
+}

@@ -141,6 +141,27 @@ impl Terrain {
     pub fn min_max(&self) -> (f32, f32) {
         min_max(&self.heights)
     }
+
+    /// An upper bound of the surface's slope (rise over run) anywhere: the steepest step between
+    /// neighbouring samples along X and along Z, combined. Bounds the bilinear surface and any
+    /// triangulation of the grid (each triangle's gradient is made of one X and one Z step).
+    pub fn max_slope(&self) -> f32 {
+        let [w, h] = self.resolution.map(|r| r as usize);
+        let [dx, dz] = self.cell_size();
+        let (mut gx, mut gz) = (0.0f32, 0.0f32);
+        for r in 0..h {
+            for c in 0..w {
+                let v = self.heights[r * w + c];
+                if c + 1 < w {
+                    gx = gx.max((self.heights[r * w + c + 1] - v).abs());
+                }
+                if r + 1 < h {
+                    gz = gz.max((self.heights[(r + 1) * w + c] - v).abs());
+                }
+            }
+        }
+        (gx / dx).hypot(gz / dz)
+    }
 }
 
 /// Bilinear lookup in a row-major grid covering `[0, size[0]] × [0, size[1]]` with samples on the
@@ -163,6 +184,25 @@ pub(crate) fn bilinear(values: &[f32], res: [u32; 2], size: [f32; 2], x: f32, z:
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn max_slope_bounds_every_cell() {
+        assert_eq!(Terrain::flat([100.0, 100.0], 3.0).max_slope(), 0.0);
+        let t = Terrain {
+            size: [20.0, 10.0],
+            resolution: [3, 2],
+            heights: vec![0.0, 1.0, 2.0, 10.0, 11.0, 12.0],
+        };
+        // Steps of 1 m over 10 m along X and 10 m over 10 m along Z.
+        assert!((t.max_slope() - 0.1f32.hypot(1.0)).abs() < 1e-6);
+        let p = Terrain::procedural(7, [2000.0, 2000.0], 300.0);
+        let g = p.max_slope();
+        for i in 0..500 {
+            let (x, z) = ((i * 37 % 1999) as f32 + 0.5, (i * 91 % 1999) as f32 + 0.25);
+            let (a, b) = (p.height_at(x, z), p.height_at(x + 0.7, z - 0.4));
+            assert!((a - b).abs() <= g * 0.7f32.hypot(0.4) * 1.0001, "{i}");
+        }
+    }
 
     #[test]
     fn height_at_is_exact_at_grid_points_and_bilinear_between() {

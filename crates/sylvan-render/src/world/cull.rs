@@ -5,7 +5,7 @@
 
 use super::{PASSES, PoolTree, TREE_BYTES};
 use crate::RenderError;
-use crate::frame::Frustum;
+use crate::frame::{CasterCull, Frustum};
 use crate::instances::SpeciesBounds;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -147,6 +147,8 @@ struct GpuParams {
     sort: [f32; 4],
     band: [f32; 4],
     species: [[f32; 4]; MAX_SPECIES],
+    /// The caster cull ([`CasterCull::gpu_rows`]; all zero without one: casters kept).
+    casters: [[f32; 4]; CasterCull::GPU_ROWS],
 }
 
 /// What one frame culls.
@@ -159,6 +161,8 @@ pub(crate) struct FrameCull<'a> {
     /// The band window (see [`ListRequest::window`]).
     pub window: [f32; 4],
     pub frustums: &'a [Option<Frustum>; PASSES],
+    /// With shadows: which casters each cascade needs.
+    pub casters: Option<&'a CasterCull>,
     pub pages: &'a [GpuPage],
     /// Changes whenever the pool buffer is replaced (grown).
     pub pool_generation: u64,
@@ -485,6 +489,9 @@ impl Cull {
             ],
             band: f.window,
             species: self.species_spheres,
+            casters: f
+                .casters
+                .map_or([[0.0; 4]; CasterCull::GPU_ROWS], CasterCull::gpu_rows),
         };
         for (p, frustum) in f.frustums.iter().enumerate() {
             if let Some(fr) = frustum {

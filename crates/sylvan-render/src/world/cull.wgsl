@@ -57,6 +57,9 @@ struct Params {
     band: vec4<f32>,
     // per species: xyz model-space centre of its bounds, w radius (plant units)
     species: array<vec4<f32>, 64>,
+    // The caster cull (frame.rs `CasterCull::gpu_rows`): cascade c's 5 planes at 6c..6c+4 and
+    // its shell (x inner, y outer) at 6c+5; at 24 the sun (xyz, zero: no cull) and the reach.
+    casters: array<vec4<f32>, 25>,
 }
 
 const PASSES: u32 = 5u;
@@ -81,6 +84,40 @@ fn inside(pass_index: u32, c: vec3<f32>, r: f32) -> bool {
         }
     }
     return true;
+}
+
+// Whether a caster in the sphere (c, r) may shade a receiver cascade `cascade` serves: its
+// shadow segment c − t·sun, t in [−r, reach + 2r], clipped by the cascade's planes, must meet
+// the cascade's shell of distances from the eye (the same formula as `CasterCull::keeps`).
+fn caster_keeps(cascade: u32, c: vec3<f32>, r: f32) -> bool {
+    let sun_reach = params.casters[6u * 4u];
+    let s = sun_reach.xyz;
+    if (dot(s, s) == 0.0) {
+        return true;
+    }
+    var t0 = -r;
+    var t1 = sun_reach.w + 2.0 * r;
+    for (var k = 0u; k < 5u; k++) {
+        let p = params.casters[6u * cascade + k];
+        let a = dot(p.xyz, c) + p.w + r;
+        let b = dot(p.xyz, s);
+        if (b > 0.0) {
+            t1 = min(t1, a / b);
+        } else if (b < 0.0) {
+            t0 = max(t0, a / b);
+        } else if (a < 0.0) {
+            return false;
+        }
+    }
+    if (t0 > t1) {
+        return false;
+    }
+    let shell = params.casters[6u * cascade + 5u];
+    let d = c - params.eye_far.xyz;
+    let nearest = clamp(dot(d, s), t0, t1);
+    let min_distance = length(d - s * nearest);
+    let max_distance = max(length(d - s * t0), length(d - s * t1));
+    return min_distance <= shell.y + r && max_distance >= shell.x - r;
 }
 
 // smoothstep from e0 to e1; with e1 <= e0 a step at e0 (as the CPU's `common::smoothstep`).
@@ -140,6 +177,9 @@ fn cull(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) l
             continue;
         }
         if (!inside(p, c, r)) {
+            continue;
+        }
+        if (p > 0u && !caster_keeps(p - 1u, c, r)) {
             continue;
         }
         let list = p * params.info.x + group;

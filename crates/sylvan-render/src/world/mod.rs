@@ -24,7 +24,7 @@ mod produce;
 pub use cull::{Culled, IndirectDraw, ListLayout, ListRequest, intersect_windows};
 
 use crate::RenderError;
-use crate::frame::{CASCADES, Frustum};
+use crate::frame::{CASCADES, CasterCull, Frustum};
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
 pub(crate) use produce::Source;
@@ -99,6 +99,9 @@ pub(crate) struct WorldView<'a> {
     pub far: f32,
     /// Per pass its frustum, `None` for a pass not drawn (shadows off).
     pub frustums: &'a [Option<Frustum>; PASSES],
+    /// With shadows: which casters each cascade needs (the same test the GPU cull makes per
+    /// tree, here per tile).
+    pub casters: Option<&'a CasterCull>,
 }
 
 /// What the world did in the last frame.
@@ -153,6 +156,9 @@ impl WorldStats {
             ("gpu_bytes", self.gpu_bytes as f64),
         ] {
             m.insert(k.to_string(), v);
+        }
+        for (c, &n) in self.trees_drawn[1..].iter().enumerate() {
+            m.insert(format!("trees_drawn_shadow{c}"), n as f64);
         }
         m
     }
@@ -375,9 +381,14 @@ impl World {
             let mut mask = 0u32;
             for (p, f) in view.frustums.iter().enumerate() {
                 let Some(f) = f else { continue };
-                if f.intersects_box(r.min, r.max)
-                    && (p > 0 || box_distance(view.eye, r.min, r.max) < range)
-                {
+                let centre = (r.min + r.max) * 0.5;
+                let radius = (r.max - r.min).length() * 0.5;
+                let needed = match (p, view.casters) {
+                    (0, _) => box_distance(view.eye, r.min, r.max) < range,
+                    (_, Some(c)) => c.keeps(p - 1, centre, radius),
+                    (_, None) => true,
+                };
+                if f.intersects_box(r.min, r.max) && needed {
                     mask |= 1 << p;
                 }
             }
@@ -426,6 +437,7 @@ impl World {
                     fade_start,
                     window: request.window,
                     frustums: view.frustums,
+                    casters: view.casters,
                     pages: &pages,
                     pool_generation: self.pool_pages as u64,
                     capacity: &capacity,

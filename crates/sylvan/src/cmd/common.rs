@@ -44,6 +44,10 @@ pub struct ViewArgs {
     /// frame before the tiled world; for comparisons).
     #[arg(long)]
     pub cpu_driven: bool,
+    /// Draw every shadow caster in each cascade's box, not only those whose shadow can reach
+    /// what the camera sees (the frame before the caster cull; for comparisons).
+    #[arg(long)]
+    pub no_caster_cull: bool,
     #[command(flatten)]
     pub bake: BakeArgs,
 }
@@ -238,6 +242,7 @@ impl ViewArgs {
             settings: self.bake.settings()?,
             cache: self.bake.cache(),
             cpu_driven: self.cpu_driven,
+            caster_cull: !self.no_caster_cull,
             ..Default::default()
         };
         options.factor()?;
