@@ -845,3 +845,27 @@ fn shadows_keep_the_crowns_opacity() {
         "thresholded at ½ the veil should cast (almost) nothing: {hard}"
     );
 }
+
+/// Casters cut to what their views can show (`tight_casters`, the default) cast the shadows
+/// of the whole bounding square: the stand under a low sun from the side, long shadows on
+/// the ground, differs only where rounding flips a texel at the α = ½ threshold.
+#[test]
+fn tight_casters_cast_the_same_shadows() {
+    let s = stand_view(35.0, 180.0, common::sun(100.0, 15.0));
+    let tight = render(&s, "zfield", 1, &[]);
+    let square = render(&s, "zfield", 1, &["zfield.tight_casters=false"]);
+    save("casters-tight", &tight);
+    save("casters-square", &square);
+    let differ = tight
+        .pixels()
+        .zip(square.pixels())
+        .filter(|(a, b)| a != b)
+        .count();
+    let f = sylvan_eval::flip(&square, &tight).unwrap();
+    eprintln!("tight casters: {differ} pixels differ, FLIP {}", f.mean);
+    assert!(f.mean < 0.001, "FLIP {}", f.mean);
+    assert!(
+        differ * 200 < (SIZE * SIZE) as usize,
+        "{differ} pixels differ"
+    );
+}

@@ -61,7 +61,8 @@ fn measure_hit(in: ZOut, with_normal: bool) -> MeasureHit {
 // same in every direction and in `measure_eval`'s light rays.
 @vertex
 fn vs_measure_tree(in: ZIn, inst: TreeInstance, @builtin(instance_index) id: u32) -> ZOut {
-    var out = z_vertex(in, inst, frame.sun_dir.xyz, true);
+    // The whole square: this pass samples coarser mips than the casters' extent allows for.
+    var out = z_vertex(in, inst, frame.sun_dir.xyz, true, false);
     out.light_views.w = id % u32(frame.camera.z);
     let sp = z_species[out.views.w];
     let texel_m = 2.0 * sp.centre_radius.w * inst.base_scale.w / f32(zp.tiles.x);

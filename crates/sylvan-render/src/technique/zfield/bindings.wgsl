@@ -28,7 +28,8 @@ struct ZParams {
     // x: sky scale; y: tree density Λ_h (trees/m²); z: normal weight; w: per-tree masks (1/0).
     sky: vec4<f32>,
     // x: camera mip bias; y: 1 when `density_per_ha` is set (it overrides the cover's
-    // density map); z: 1 when shadows store the crowns' opacity (else opaque where α > ½).
+    // density map); z: 1 when shadows store the crowns' opacity (else opaque where α > ½);
+    // w: 1 when casters cover only what their views can show (`caster_extent`).
     extra: vec4<f32>,
 };
 

@@ -180,7 +180,7 @@ impl ZFieldBindings {
                 draw.lod_bias,
                 f32::from(u8::from(draw.density_per_ha > 0.0)),
                 f32::from(u8::from(draw.shadow_opacity)),
-                0.0,
+                f32::from(u8::from(draw.tight_casters)),
             ],
         };
         let device = &gpu.device;

@@ -40,7 +40,7 @@ fn model_dir_upper(a: vec3<f32>, rot: vec4<f32>) -> vec3<f32> {
 // The proxy quad of one tree facing `toward` (the eye, or the sun when `is_dir`): BN12 §5
 // step 1 (the 3 views and weights, per tree) and the quad covering the tree's box (its
 // bounding sphere's silhouette).
-fn z_vertex(in: ZIn, inst_in: TreeInstance, toward_world: vec3<f32>, is_dir: bool) -> ZOut {
+fn z_vertex(in: ZIn, inst_in: TreeInstance, toward_world: vec3<f32>, is_dir: bool, tight: bool) -> ZOut {
     // Every species is in one list: the instance's rot.z is species + tint seed.
     let species = u32(floor(inst_in.rot.z));
     var inst = inst_in;
@@ -68,16 +68,6 @@ fn z_vertex(in: ZIn, inst_in: TreeInstance, toward_world: vec3<f32>, is_dir: boo
         vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, -1.0), vec2<f32>(1.0, 1.0),
         vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, 1.0), vec2<f32>(-1.0, 1.0),
     )[in.vertex % 6u];
-    let world = centre + (right * st.x + up * st.y) * radius * grow;
-    var out: ZOut;
-    out.pos = frame.view_proj * vec4<f32>(world, 1.0);
-    out.world = world;
-    out.views = vec4<u32>(pick.views, species);
-    out.weights = pick.weights;
-    out.light_views = vec4<u32>(light.views, 0u);
-    out.light_weights = light.weights;
-    out.base_scale = inst.base_scale;
-    out.rot = inst.rot;
     // A texel is 2·radius/tile metres; a pixel covers dist / pixels_per_metre (camera) or one
     // shadow-map texel (sun).
     let texel_m = 2.0 * radius / f32(zp.tiles.x);
@@ -89,8 +79,63 @@ fn z_vertex(in: ZIn, inst_in: TreeInstance, toward_world: vec3<f32>, is_dir: boo
     // The camera pass samples `lod_bias` mips finer (sharper; measured closer to the
     // reference on the default scene), casters at their texel footprint.
     let bias = select(zp.extra.x, 0.0, is_dir);
-    out.lod = max(log2(pixel_m / texel_m) + bias, 0.0);
+    let lod = max(log2(pixel_m / texel_m) + bias, 0.0);
+    // The square around the sphere (camera), or for a caster only the part its 3 views can
+    // cover (`caster_extent`; `tight`), in metres from the centre along right and up.
+    var world = centre + (right * st.x + up * st.y) * radius * grow;
+    if (is_dir && tight && zp.extra.w > 0.5) {
+        // A mip ⌈lod⌉ texel overlapping the box has coverage and bilinear filtering reaches
+        // one more: 2 · 2^⌈lod⌉ image texels (+ 2); the shadow map rasterises texel centres
+        // (+ 2 of its texels). In model units.
+        let margin = (texel_m * (2.0 * exp2(ceil(lod)) + 2.0) + 2.0 * pixel_m) / inst.base_scale.w;
+        let e = caster_extent(sp, pick, instance_dir_to_model(right, inst.rot), instance_dir_to_model(up, inst.rot), instance_dir_to_model(a, inst.rot), margin) * inst.base_scale.w;
+        let corner = select(e.xy, e.zw, st > vec2<f32>(0.0));
+        world = centre + right * corner.x + up * corner.y;
+    }
+    var out: ZOut;
+    out.pos = frame.view_proj * vec4<f32>(world, 1.0);
+    out.world = world;
+    out.views = vec4<u32>(pick.views, species);
+    out.weights = pick.weights;
+    out.light_views = vec4<u32>(light.views, 0u);
+    out.light_weights = light.weights;
+    out.base_scale = inst.base_scale;
+    out.rot = inst.rot;
+    out.lod = lod;
     return out;
+}
+
+// Where a caster quad facing `a` (model space, with its `right` and `up` axes) can have
+// coverage, in model units from the frames' centre along right (x, z) and up (y, w): each of
+// the 3 views sees the tree's box, and a point p of the quad shows what lies on the line
+// through it along that view's direction f — inside the box only if p is in the box's oblique
+// projection along f onto the quad's plane: the box's extent along
+// `right − a (f·right)/(f·a)` (and likewise for up). The union of the views', widened by
+// `margin`, within the bounding square.
+fn caster_extent(sp: ZSpecies, pick: HemiPick, right: vec3<f32>, up: vec3<f32>, a: vec3<f32>, margin: f32) -> vec4<f32> {
+    let r = sp.centre_radius.w;
+    let half = 0.5 * (sp.bbox_max.xyz - sp.bbox_min.xyz);
+    let mid = 0.5 * (sp.bbox_max.xyz + sp.bbox_min.xyz) - sp.centre_radius.xyz;
+    var lo = vec2<f32>(1e30);
+    var hi = vec2<f32>(-1e30);
+    for (var i = 0u; i < 3u; i = i + 1u) {
+        if (pick.weights[i] <= 0.0) {
+            continue;
+        }
+        let f = z_views[pick.views[i]].f.xyz;
+        let fa = dot(f, a);
+        if (fa < 0.05) {
+            // A view almost along the quad's plane: keep the whole square.
+            return vec4<f32>(-r, -r, r, r);
+        }
+        let wr = right - a * (dot(f, right) / fa);
+        let wu = up - a * (dot(f, up) / fa);
+        let c = vec2<f32>(dot(mid, wr), dot(mid, wu));
+        let e = vec2<f32>(dot(half, abs(wr)), dot(half, abs(wu)));
+        lo = min(lo, c - e);
+        hi = max(hi, c + e);
+    }
+    return vec4<f32>(clamp(lo - margin, vec2<f32>(-r), vec2<f32>(r)), clamp(hi + margin, vec2<f32>(-r), vec2<f32>(r)));
 }
 
 // Atlas coordinates of image point `uv` of `tile`, kept inside the tile at the coarser of the
@@ -191,7 +236,7 @@ struct ZFragment {
 
 @vertex
 fn vs_zfield(in: ZIn, inst: TreeInstance) -> ZOut {
-    return z_vertex(in, inst, frame.camera.xyz, false);
+    return z_vertex(in, inst, frame.camera.xyz, false, false);
 }
 
 @fragment
@@ -353,7 +398,7 @@ fn z_fragment(in: ZOut, masked: bool) -> ZFragment {
 // soft shadows; one layer, so too bright under dense canopies — not the default).
 @vertex
 fn vs_zfield_shadow(in: ZIn, inst: TreeInstance) -> ZOut {
-    return z_vertex(in, inst, frame.sun_dir.xyz, true);
+    return z_vertex(in, inst, frame.sun_dir.xyz, true, true);
 }
 
 @fragment
