@@ -276,3 +276,49 @@ fn caster_cull_changes_no_pixel_and_draws_fewer_casters() {
         }
     }
 }
+
+/// `octahedral` and `zfield` casters cut to what their views can show (`tight_casters`, the
+/// default) cast the bounding square's shadows: under a low sun only texels at the coverage
+/// threshold flip by rounding.
+#[test]
+fn tight_casters_cast_the_squares_shadows() {
+    let gpu = gpu();
+    let world = sylvan_scene::World {
+        tile_m: 64.0,
+        ..Default::default()
+    };
+    let mut s = forest_scene(300.0, 60.0, world);
+    s.sun = sun(60.0, 15.0);
+    for technique in ["octahedral", "zfield"] {
+        let shot = |tight: bool| {
+            let options = RenderOptions {
+                width: 128,
+                height: 128,
+                shadow_resolution: 512,
+                technique: technique.into(),
+                settings: vec![
+                    sylvan_scene::Setting::from_arg(&format!("{technique}.tight_casters={tight}"))
+                        .unwrap(),
+                ],
+                cache: sylvan_render::bake::CachePolicy::Off,
+                ..Default::default()
+            };
+            let mut r = Renderer::new(&gpu, &s, &[test_tree()], &options).expect("renderer");
+            r.render(&gpu, &s.camera, &s.sun).expect("frame");
+            image::DynamicImage::ImageRgba8(r.read_image(&gpu).unwrap()).into_rgb8()
+        };
+        let (square, tight) = (shot(false), shot(true));
+        let differ = tight
+            .pixels()
+            .zip(square.pixels())
+            .filter(|(a, b)| a != b)
+            .count();
+        let f = sylvan_eval::flip(&square, &tight).unwrap();
+        eprintln!("{technique}: {differ} pixels differ, FLIP {}", f.mean);
+        assert!(f.mean < 0.001, "{technique}: FLIP {}", f.mean);
+        assert!(
+            differ * 100 < 128 * 128,
+            "{technique}: {differ} pixels differ"
+        );
+    }
+}

@@ -231,6 +231,28 @@ fn instance_dir_to_model(d: vec3<f32>, rot: vec4<f32>) -> vec3<f32> {
     return vec3<f32>(rot.x * d.x - rot.y * d.z, d.y, rot.y * d.x + rot.x * d.z);
 }
 
+// Where an image-based caster's quad can have coverage from one baked view. The quad faces
+// `a` through the frames' centre, with axes `right` and `up` (model space); the view images
+// the box (centre `mid` relative to the frames' centre, half sides `half`) along `f`. A quad
+// point p shows what lies on the line through it along f, shifted along a by up to `slack`
+// (parallax; 0 without), so it can be covered only inside the box's oblique projection along
+// f onto the quad's plane — the box's extent along `right − a (f·right)/(f·a)` (and likewise
+// up) — widened by the shift's image `slack (f·right, f·up)/(f·a)`. Returns (lo.xy, hi.xy)
+// in model units along (right, up); w < lo.x when the view is too oblique to bound (f·a <
+// 0.05).
+fn caster_view_extent(mid: vec3<f32>, half: vec3<f32>, right: vec3<f32>, up: vec3<f32>, a: vec3<f32>, f: vec3<f32>, slack: f32) -> vec4<f32> {
+    let fa = dot(f, a);
+    if (fa < 0.05) {
+        return vec4<f32>(1.0, 1.0, -1.0, -1.0);
+    }
+    let t = vec2<f32>(dot(f, right), dot(f, up)) / fa;
+    let wr = right - a * t.x;
+    let wu = up - a * t.y;
+    let c = vec2<f32>(dot(mid, wr), dot(mid, wu));
+    let e = vec2<f32>(dot(half, abs(wr)), dot(half, abs(wu))) + abs(t) * slack;
+    return vec4<f32>(c - e, c + e);
+}
+
 // A model-space point (plant units) in world space.
 fn instance_to_world(p: vec3<f32>, base_scale: vec4<f32>, rot: vec4<f32>) -> vec3<f32> {
     return instance_dir_to_world(p * base_scale.w, rot) + base_scale.xyz;

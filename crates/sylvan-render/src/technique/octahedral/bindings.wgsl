@@ -22,7 +22,8 @@ struct OctAtlas {
     tiles: vec4<u32>,
     // x: leaf translucency; y: 1 / tiles per row; z: 1 / rows of tiles per layer.
     params: vec4<f32>,
-    // x: parallax steps; y: views blended (1 or 3); z: shadow depth offset (fraction of radius).
+    // x: parallax steps; y: views blended (1 or 3); z: shadow depth offset (fraction of radius);
+    // w: 1 when casters cover only what their view can show (`tight_casters`).
     draw: vec4<f32>,
 };
 

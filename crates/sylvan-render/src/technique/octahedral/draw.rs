@@ -138,7 +138,7 @@ impl Octahedral {
                 draw.parallax_steps as f32,
                 draw.views as f32,
                 SHADOW_OFFSET,
-                0.0,
+                f32::from(u8::from(draw.tight_casters)),
             ],
         };
         let device = &gpu.device;

@@ -45,7 +45,11 @@
 //! - **Shadows**: each tree casts a quad facing the sun textured from the grid view nearest
 //!   the sun, with stochastic coverage (the 3×3 PCF softens it) and the parallaxed surface's
 //!   depth written (`frag_depth`, offset away from the sun by [`SHADOW_OFFSET`] of the radius),
-//!   so the crown's sunlit side is not shadowed by a plane through its middle.
+//!   so the crown's sunlit side is not shadowed by a plane through its middle. The quad covers
+//!   only what that view can show (`tight_casters`, default on: the box projected along the
+//!   view, widened by the parallax's reach and the mips' spread; `caster_view_extent` in
+//!   `frame.wgsl`) — the same shadows up to threshold flips by rounding (ꟻLIP 0.0002 on the
+//!   built-in forest) from fewer fragments.
 //!
 //! **Cost**: per frame a CPU sort of the camera instances (O(n log n)); per pass one draw of
 //! 2 triangles per tree; per fragment 3 × (1 + parallax steps) normal/depth fetches and 3
@@ -162,6 +166,10 @@ pub struct OctahedralDrawParams {
     pub parallax_steps: u32,
     /// Views blended per pixel: 3 (the grid triangle) or 1 (the nearest view, no blending).
     pub views: u32,
+    /// Shadow casters cover only the part of their sun-facing quad that their view can show
+    /// (the box projected along it, widened by the parallax's reach) instead of the bounding
+    /// square.
+    pub tight_casters: bool,
 }
 
 impl Default for OctahedralDrawParams {
@@ -169,6 +177,7 @@ impl Default for OctahedralDrawParams {
         Self {
             parallax_steps: 2,
             views: 3,
+            tight_casters: true,
         }
     }
 }
@@ -184,6 +193,11 @@ impl ParamTable for OctahedralDrawParams {
             key: "views",
             unit: "views",
             doc: "views blended per pixel: 3 (the grid triangle) or 1 (the nearest view)",
+        },
+        ParamDoc {
+            key: "tight_casters",
+            unit: "bool",
+            doc: "shadow casters cover only what their view can show (the box's projection and the parallax's reach), not the bounding square; false: the whole square (for comparisons)",
         },
     ];
 

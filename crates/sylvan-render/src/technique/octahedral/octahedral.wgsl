@@ -97,14 +97,6 @@ fn oct_vertex(in: OctIn, inst_in: TreeInstance, toward_world: vec3<f32>, is_dir:
         vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, -1.0), vec2<f32>(1.0, 1.0),
         vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, 1.0), vec2<f32>(-1.0, 1.0),
     )[in.vertex % 6u];
-    let world = centre + (right * st.x + up * st.y) * radius * grow;
-    var out: OctOut;
-    out.pos = frame.view_proj * vec4<f32>(world, 1.0);
-    out.world = world;
-    out.views = vec4<u32>(pick.views, species);
-    out.weights = pick.weights;
-    out.base_scale = inst.base_scale;
-    out.rot = inst.rot;
     // A texel is 2·radius/tile metres; a pixel covers dist / pixels_per_metre (camera) or one
     // shadow-map texel (sun).
     let texel_m = 2.0 * radius / f32(atlas.tiles.x);
@@ -113,7 +105,37 @@ fn oct_vertex(in: OctIn, inst_in: TreeInstance, toward_world: vec3<f32>, is_dir:
         let row_x = vec3<f32>(frame.view_proj[0].x, frame.view_proj[1].x, frame.view_proj[2].x);
         pixel_m = frame.shadow_params.x * 2.0 / max(length(row_x), 1e-6);
     }
-    out.lod = max(log2(pixel_m / texel_m), 0.0);
+    let lod = max(log2(pixel_m / texel_m), 0.0);
+    var world = centre + (right * st.x + up * st.y) * radius * grow;
+    if (is_dir && atlas.draw.w > 0.5) {
+        // A caster covers only what its view can show (`caster_view_extent`), its parallax
+        // moving the sample along the sun's ray by up to (R + |p − c|·sin θ)/(f·a) — |p − c|
+        // at most √2 R on the quad — widened by the mips' spread (2 · 2^⌈lod⌉ + 2 image
+        // texels) and 2 shadow texels; in model units, within the bounding square.
+        let r = sp.centre_radius.w;
+        let am = instance_dir_to_model(a, inst.rot);
+        let f = oct_views[pick.views.x].f.xyz;
+        let fa = dot(f, am);
+        let slack = r * (1.0 + 1.4143 * sqrt(max(1.0 - fa * fa, 0.0))) / max(fa, 0.2);
+        let half = 0.5 * (sp.bbox_max.xyz - sp.bbox_min.xyz);
+        let mid = 0.5 * (sp.bbox_max.xyz + sp.bbox_min.xyz) - sp.centre_radius.xyz;
+        let e = caster_view_extent(mid, half, instance_dir_to_model(right, inst.rot), instance_dir_to_model(up, inst.rot), am, f, slack);
+        if (e.z >= e.x) {
+            let margin = (texel_m * (2.0 * exp2(ceil(lod)) + 2.0) + 2.0 * pixel_m) / inst.base_scale.w;
+            let lo = clamp(e.xy - margin, vec2<f32>(-r), vec2<f32>(r)) * inst.base_scale.w;
+            let hi = clamp(e.zw + margin, vec2<f32>(-r), vec2<f32>(r)) * inst.base_scale.w;
+            let corner = select(lo, hi, st > vec2<f32>(0.0));
+            world = centre + right * corner.x + up * corner.y;
+        }
+    }
+    var out: OctOut;
+    out.pos = frame.view_proj * vec4<f32>(world, 1.0);
+    out.world = world;
+    out.views = vec4<u32>(pick.views, species);
+    out.weights = pick.weights;
+    out.base_scale = inst.base_scale;
+    out.rot = inst.rot;
+    out.lod = lod;
     return out;
 }
 

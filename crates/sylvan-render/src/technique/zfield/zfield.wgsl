@@ -106,12 +106,9 @@ fn z_vertex(in: ZIn, inst_in: TreeInstance, toward_world: vec3<f32>, is_dir: boo
 }
 
 // Where a caster quad facing `a` (model space, with its `right` and `up` axes) can have
-// coverage, in model units from the frames' centre along right (x, z) and up (y, w): each of
-// the 3 views sees the tree's box, and a point p of the quad shows what lies on the line
-// through it along that view's direction f — inside the box only if p is in the box's oblique
-// projection along f onto the quad's plane: the box's extent along
-// `right − a (f·right)/(f·a)` (and likewise for up). The union of the views', widened by
-// `margin`, within the bounding square.
+// coverage, in model units from the frames' centre along right (x, z) and up (y, w): the
+// union of its 3 views' `caster_view_extent` (step 5 samples p's own projection: no
+// parallax), widened by `margin`, within the bounding square.
 fn caster_extent(sp: ZSpecies, pick: HemiPick, right: vec3<f32>, up: vec3<f32>, a: vec3<f32>, margin: f32) -> vec4<f32> {
     let r = sp.centre_radius.w;
     let half = 0.5 * (sp.bbox_max.xyz - sp.bbox_min.xyz);
@@ -122,18 +119,12 @@ fn caster_extent(sp: ZSpecies, pick: HemiPick, right: vec3<f32>, up: vec3<f32>, 
         if (pick.weights[i] <= 0.0) {
             continue;
         }
-        let f = z_views[pick.views[i]].f.xyz;
-        let fa = dot(f, a);
-        if (fa < 0.05) {
-            // A view almost along the quad's plane: keep the whole square.
+        let e = caster_view_extent(mid, half, right, up, a, z_views[pick.views[i]].f.xyz, 0.0);
+        if (e.z < e.x) {
             return vec4<f32>(-r, -r, r, r);
         }
-        let wr = right - a * (dot(f, right) / fa);
-        let wu = up - a * (dot(f, up) / fa);
-        let c = vec2<f32>(dot(mid, wr), dot(mid, wu));
-        let e = vec2<f32>(dot(half, abs(wr)), dot(half, abs(wu)));
-        lo = min(lo, c - e);
-        hi = max(hi, c + e);
+        lo = min(lo, e.xy);
+        hi = max(hi, e.zw);
     }
     return vec4<f32>(clamp(lo - margin, vec2<f32>(-r), vec2<f32>(r)), clamp(hi + margin, vec2<f32>(-r), vec2<f32>(r)));
 }
