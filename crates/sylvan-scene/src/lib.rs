@@ -34,10 +34,10 @@ pub use heightmap::MAX_RASTER_BYTES;
 pub use params::{LodBand, Origin, ParamValue, Setting};
 pub use path::{CameraKey, CameraPath, Interpolation};
 pub use placement::{
-    DEFAULT_DENSITY_PER_HA, Density, DensityMap, MAX_DENSITY_PER_HA, MAX_PATTERN_POINTS, MAX_TREES,
-    MAX_WORLD_TREES, Placed, Placement, PlacementError, PlacementMethod, SeededForest,
-    SpeciesLayout, estimate_trees, pattern_radius_m, peak_per_ha, place_trees, poisson_disk,
-    poisson_tile,
+    CandidateRun, DEFAULT_DENSITY_PER_HA, Density, DensityMap, MAX_DENSITY_PER_HA,
+    MAX_PATTERN_POINTS, MAX_TREES, MAX_WORLD_TREES, Placed, Placement, PlacementError,
+    PlacementMethod, SeededForest, SpeciesLayout, estimate_trees, pattern_radius_m, peak_per_ha,
+    place_trees, poisson_disk, poisson_tile,
 };
 pub use species::{MAX_TREE_HEIGHT_M, PRESETS};
 pub use terrain::{

@@ -317,6 +317,7 @@ pub(crate) fn place_trees_within(
                 rho: candidates.len() as f64 / area.max(1e-6),
                 radius,
                 blockers: &blockers,
+                single: false,
             };
             let mut local = vec![0.0f32; layouts.len()];
             for &p in &candidates {
@@ -350,6 +351,9 @@ struct Thinning<'a> {
     radius: f32,
     /// Fixed trees: no density-driven tree within `radius` of one.
     blockers: &'a SpatialHash,
+    /// Thin in f32 (`wang`: the arithmetic the GPU seed producer repeats, `world/seed.wgsl`)
+    /// rather than f64 (`poisson`, `tiled`: kept so their forests stay as they were).
+    single: bool,
 }
 
 impl Thinning<'_> {
@@ -365,14 +369,27 @@ impl Thinning<'_> {
         if !terrain.contains(p.x, p.y) {
             return None;
         }
-        let u = rng.f64() * self.rho;
-        let mut cum = 0.0f64;
         let mut chosen = None;
-        for (i, l) in self.layouts.iter().enumerate() {
-            local[i] = l.density.per_m2(self.size, p.x, p.y);
-            cum += local[i] as f64;
-            if chosen.is_none() && u < cum {
-                chosen = Some(i);
+        if self.single {
+            // One draw, 24 bits, times the pattern density in f32; sums in species order.
+            let u = rng.f32() * self.rho as f32;
+            let mut cum = 0.0f32;
+            for (i, l) in self.layouts.iter().enumerate() {
+                local[i] = l.density.per_m2(self.size, p.x, p.y);
+                cum += local[i];
+                if chosen.is_none() && u < cum {
+                    chosen = Some(i);
+                }
+            }
+        } else {
+            let u = rng.f64() * self.rho;
+            let mut cum = 0.0f64;
+            for (i, l) in self.layouts.iter().enumerate() {
+                local[i] = l.density.per_m2(self.size, p.x, p.y);
+                cum += local[i] as f64;
+                if chosen.is_none() && u < cum {
+                    chosen = Some(i);
+                }
             }
         }
         let (hr, rot) = (rng.f32(), rng.f32());
@@ -530,23 +547,59 @@ impl SeededForest {
     }
 
     /// Appends the trees in `[min, max)` (x, z) to `out`, in a fixed order (tile copies by row,
-    /// then pattern points by z). Time ∝ the rectangle's area. Under `wang` candidate `j` of
-    /// copy `(tx, ty)` showing tile `t` draws its numbers from
-    /// `hash2(seed ^ mix(t·2¹⁶ + j + 1), tx, ty)` (under `tiled`, `t` = 0).
+    /// then pattern points by z: [`SeededForest::candidate_runs`]'s order). Time ∝ the
+    /// rectangle's area. Under `wang` candidate `j` of copy `(tx, ty)` showing tile `t` draws
+    /// its numbers from `hash2(seed ^ mix(t·2¹⁶ + j + 1), tx, ty)` (under `tiled`, `t` = 0) and
+    /// is thinned in f32 (the GPU seed producer repeats this arithmetic).
     pub fn produce(&self, terrain: &Terrain, min: Vec2, max: Vec2, out: &mut Vec<TreeInstance>) {
-        let min = min.max(Vec2::ZERO);
-        let max = max.min(Vec2::from(self.size));
-        if min.x >= max.x || min.y >= max.y {
-            return;
-        }
         let thin = Thinning {
             layouts: &self.layouts,
             size: self.size,
             rho: self.rho,
             radius: self.radius,
             blockers: &self.blockers,
+            single: self.method() == PlacementMethod::Wang,
         };
         let mut local = vec![0.0f32; self.layouts.len()];
+        let mut runs = Vec::new();
+        let (min, max) = self.candidate_runs(min, max, &mut runs);
+        for run in &runs {
+            let pattern = self.tile_points(run.tile as usize);
+            for j in run.first..run.end {
+                let q = run.origin + pattern[j as usize];
+                if q.x < min.x || q.x >= max.x {
+                    continue;
+                }
+                let key = hash2(
+                    self.seed ^ mix(((run.tile as u64) << 16) + j as u64 + 1),
+                    run.tx,
+                    run.ty,
+                );
+                let mut rng = Rng::new(key);
+                if let Some(mut t) = thin.consider(terrain, q, &mut rng, &mut local) {
+                    t.seed = (key >> 32) as u32;
+                    out.push(t);
+                }
+            }
+        }
+    }
+
+    /// The candidates of `[min, max)` (x, z; clipped to the terrain, the clipped rectangle is
+    /// returned): per tile copy overlapping it, by row, the run of its tile's points (sorted by
+    /// z) whose z lies in the rectangle — each point `j` of a run is a candidate when its x
+    /// lies in the rectangle too. The runs are cleared first.
+    pub fn candidate_runs(
+        &self,
+        min: Vec2,
+        max: Vec2,
+        out: &mut Vec<CandidateRun>,
+    ) -> (Vec2, Vec2) {
+        out.clear();
+        let min = min.max(Vec2::ZERO);
+        let max = max.min(Vec2::from(self.size));
+        if min.x >= max.x || min.y >= max.y {
+            return (min, max);
+        }
         let copies = |lo: f32, hi: f32| {
             (lo / self.tile).floor() as i64..=((hi / self.tile).ceil() as i64 - 1)
         };
@@ -554,33 +607,84 @@ impl SeededForest {
             let oz = ty as f32 * self.tile;
             for tx in copies(min.x, max.x) {
                 let ox = tx as f32 * self.tile;
-                let (t, pattern) = match &self.pattern {
-                    Pattern::Periodic(p) => (0, &p[..]),
-                    Pattern::Wang(set) => {
-                        let t = set.tile_of(tx, ty);
-                        (t as u64, set.points(t))
-                    }
+                let tile = match &self.pattern {
+                    Pattern::Periodic(_) => 0,
+                    Pattern::Wang(set) => set.tile_of(tx, ty),
                 };
-                // The pattern is sorted by z: only the points whose row lies in the rectangle.
+                let pattern = self.tile_points(tile);
                 let first = pattern.partition_point(|p| oz + p.y < min.y);
-                for (j, p) in pattern.iter().enumerate().skip(first) {
-                    let q = Vec2::new(ox + p.x, oz + p.y);
-                    if q.y >= max.y {
-                        break;
-                    }
-                    if q.x < min.x || q.x >= max.x {
-                        continue;
-                    }
-                    let key = hash2(self.seed ^ mix((t << 16) + j as u64 + 1), tx, ty);
-                    let mut rng = Rng::new(key);
-                    if let Some(mut t) = thin.consider(terrain, q, &mut rng, &mut local) {
-                        t.seed = (key >> 32) as u32;
-                        out.push(t);
-                    }
+                let end = first + pattern[first..].partition_point(|p| oz + p.y < max.y);
+                if end > first {
+                    out.push(CandidateRun {
+                        tile: tile as u32,
+                        tx,
+                        ty,
+                        origin: Vec2::new(ox, oz),
+                        first: first as u32,
+                        end: end as u32,
+                    });
                 }
             }
         }
+        (min, max)
     }
+
+    /// The points of pattern tile `tile` (sorted by z, then x): one tile under `tiled`, the
+    /// 16 Wang tiles under `wang`.
+    pub fn tile_points(&self, tile: usize) -> &[Vec2] {
+        match &self.pattern {
+            Pattern::Periodic(p) => p,
+            Pattern::Wang(set) => set.points(tile),
+        }
+    }
+
+    /// Pattern tiles: 1 under `tiled`, [`WangSet::TILES`] under `wang`.
+    pub fn pattern_tiles(&self) -> usize {
+        match &self.pattern {
+            Pattern::Periodic(_) => 1,
+            Pattern::Wang(_) => WangSet::TILES,
+        }
+    }
+
+    /// The placement seed the candidates' numbers are hashed from.
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+
+    /// The candidate pattern's density, points per m² (the thinning's ρ).
+    pub fn pattern_density(&self) -> f64 {
+        self.rho
+    }
+
+    /// The terrain extent it covers, metres.
+    pub fn size(&self) -> [f32; 2] {
+        self.size
+    }
+
+    /// Whether a fixed tree lies within the pattern radius of `[min, max)` (x, z): the trees
+    /// there must keep clear of it.
+    pub fn blocked_near(&self, min: Vec2, max: Vec2) -> bool {
+        self.blockers.any_near_rect(min, max, self.radius)
+    }
+}
+
+/// A run of candidates of a [`SeededForest`]: points `first..end` of pattern tile `tile`
+/// (index into [`SeededForest::tile_points`]), shown by tile copy `(tx, ty)` whose corner is
+/// `origin` (`(tx, ty) × side`, rounded as the CPU rounds it).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CandidateRun {
+    /// Pattern tile.
+    pub tile: u32,
+    /// Copy column.
+    pub tx: i64,
+    /// Copy row.
+    pub ty: i64,
+    /// The copy's corner (x, z), metres.
+    pub origin: Vec2,
+    /// First point of the run.
+    pub first: u32,
+    /// One past the last point.
+    pub end: u32,
 }
 
 /// The Poisson pattern radius (minimum spacing) for a forest whose densest part has
@@ -733,6 +837,30 @@ impl SpatialHash {
 
     fn key(p: Vec2, cell: f32) -> (i64, i64) {
         ((p.x / cell).floor() as i64, (p.y / cell).floor() as i64)
+    }
+
+    /// Whether a point lies within `r` of the rectangle `[min, max]`.
+    fn any_near_rect(&self, min: Vec2, max: Vec2, r: f32) -> bool {
+        if self.cells.is_empty() {
+            return false;
+        }
+        let lo = Self::key(min - Vec2::splat(r), self.cell);
+        let hi = Self::key(max + Vec2::splat(r), self.cell);
+        if (hi.0 - lo.0 + 1).saturating_mul(hi.1 - lo.1 + 1) > self.cells.len() as i64 {
+            return self
+                .cells
+                .values()
+                .flatten()
+                .any(|q| (q.clamp(min, max) - *q).length_squared() < r * r);
+        }
+        (lo.1..=hi.1).any(|y| {
+            (lo.0..=hi.0).any(|x| {
+                self.cells.get(&(x, y)).is_some_and(|v| {
+                    v.iter()
+                        .any(|q| (q.clamp(min, max) - *q).length_squared() < r * r)
+                })
+            })
+        })
     }
 
     fn any_within(&self, p: Vec2, r: f32) -> bool {
