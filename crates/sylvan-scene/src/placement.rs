@@ -369,29 +369,16 @@ impl Thinning<'_> {
         if !terrain.contains(p.x, p.y) {
             return None;
         }
-        let mut chosen = None;
-        if self.single {
-            // One draw, 24 bits, times the pattern density in f32; sums in species order.
-            let u = rng.f32() * self.rho as f32;
-            let mut cum = 0.0f32;
-            for (i, l) in self.layouts.iter().enumerate() {
-                local[i] = l.density.per_m2(self.size, p.x, p.y);
-                cum += local[i];
-                if chosen.is_none() && u < cum {
-                    chosen = Some(i);
-                }
-            }
-        } else {
-            let u = rng.f64() * self.rho;
-            let mut cum = 0.0f64;
-            for (i, l) in self.layouts.iter().enumerate() {
-                local[i] = l.density.per_m2(self.size, p.x, p.y);
-                cum += local[i] as f64;
-                if chosen.is_none() && u < cum {
-                    chosen = Some(i);
-                }
-            }
+        for (d, l) in local.iter_mut().zip(self.layouts) {
+            *d = l.density.per_m2(self.size, p.x, p.y);
         }
+        let local = &local[..self.layouts.len()];
+        // `wang`: one 24-bit draw times ρ, sums in f32 (what the GPU can repeat); else f64.
+        let chosen = if self.single {
+            first_below(rng.f32() * self.rho as f32, local)
+        } else {
+            first_below(rng.f64() * self.rho, local)
+        };
         let (hr, rot) = (rng.f32(), rng.f32());
         let i = chosen?;
         if self.blockers.any_within(p, self.radius) {
@@ -406,6 +393,18 @@ impl Thinning<'_> {
             seed: 0,
         })
     }
+}
+
+/// The first species whose cumulative density (summed in `T`, in species order) exceeds `u`.
+fn first_below<T>(u: T, densities: &[f32]) -> Option<usize>
+where
+    T: Copy + PartialOrd + std::ops::Add<Output = T> + From<f32>,
+{
+    let mut cum = T::from(0.0);
+    densities.iter().position(|&d| {
+        cum = cum + T::from(d);
+        u < cum
+    })
 }
 
 /// The density-driven trees of `tiled` or `wang` placement, produced for any rectangle of the
@@ -635,14 +634,6 @@ impl SeededForest {
         match &self.pattern {
             Pattern::Periodic(p) => p,
             Pattern::Wang(set) => set.points(tile),
-        }
-    }
-
-    /// Pattern tiles: 1 under `tiled`, [`WangSet::TILES`] under `wang`.
-    pub fn pattern_tiles(&self) -> usize {
-        match &self.pattern {
-            Pattern::Periodic(_) => 1,
-            Pattern::Wang(_) => WangSet::TILES,
         }
     }
 
