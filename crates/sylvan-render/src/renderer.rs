@@ -61,6 +61,9 @@ pub struct RenderOptions {
     /// ([`frame::CasterCull`]); off: every caster in the cascade's box (for comparisons — the
     /// pictures are the same).
     pub caster_cull: bool,
+    /// Seed a `wang` forest's tiles on the GPU ([`crate::world`]'s seed producer, BN12 §4);
+    /// off: every tile from the CPU workers (for comparisons — the same trees).
+    pub gpu_seeds: bool,
 }
 
 impl Default for RenderOptions {
@@ -80,6 +83,7 @@ impl Default for RenderOptions {
             cache: CachePolicy::Default,
             cpu_driven: false,
             caster_cull: true,
+            gpu_seeds: true,
         }
     }
 }
@@ -475,7 +479,13 @@ impl Renderer {
         );
         let requests = technique.list_requests();
         let world = match gpu_driven {
-            true => Some(World::new(gpu, scene, source, &requests)?),
+            true => Some(World::new(
+                gpu,
+                scene,
+                source,
+                &requests,
+                options.gpu_seeds,
+            )?),
             false => None,
         };
         let renderer = Self {

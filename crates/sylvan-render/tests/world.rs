@@ -8,9 +8,18 @@ use common::{gpu, scene, sun, terrain, test_tree};
 use glam::{Vec2, Vec3};
 use std::sync::Arc;
 use sylvan_render::{RenderOptions, Renderer};
-use sylvan_scene::{Camera, Density, SeededForest, SpeciesLayout, TreeInstance};
+use sylvan_scene::{Camera, Density, PlacementMethod, SeededForest, SpeciesLayout, TreeInstance};
 
 fn forest_scene(size: f32, per_ha: f32, world: sylvan_scene::World) -> sylvan_scene::Scene {
+    forest_scene_with(size, per_ha, world, PlacementMethod::Tiled)
+}
+
+fn forest_scene_with(
+    size: f32,
+    per_ha: f32,
+    world: sylvan_scene::World,
+    method: PlacementMethod,
+) -> sylvan_scene::Scene {
     let t = terrain(size, 65, |x, z| 4.0 * (x * 0.013).sin() * (z * 0.011).cos());
     // A few placed trees (as from a positions file) beside the seeded forest.
     let placed: Vec<TreeInstance> = (0..12)
@@ -30,7 +39,7 @@ fn forest_scene(size: f32, per_ha: f32, world: sylvan_scene::World) -> sylvan_sc
         height_m: [8.0, 12.0],
         density: Density::PerHectare(per_ha),
     }];
-    let forest = SeededForest::new(t.size, &layouts, 5, &placed).unwrap();
+    let forest = SeededForest::with_method(t.size, &layouts, 5, method, &placed).unwrap();
     let camera = Camera {
         position: Vec3::new(20.0, 30.0, 20.0),
         look_at: Vec3::new(150.0, 0.0, 150.0),
@@ -100,8 +109,67 @@ fn gpu_cull_draws_what_the_cpu_lists_drew() {
     }
 }
 
+/// A `wang` forest seeded on the GPU (BN12 §4) draws the trees, triangles and picture the CPU
+/// tile workers gave; tiles holding or near the placed trees stay on the CPU.
+#[test]
+fn gpu_seeds_draw_what_the_cpu_workers_drew() {
+    let gpu = gpu();
+    let world = sylvan_scene::World {
+        tile_m: 64.0,
+        ..Default::default()
+    };
+    let s = forest_scene_with(300.0, 200.0, world, PlacementMethod::Wang);
+    let frame = |gpu_seeds: bool| {
+        let options = RenderOptions {
+            width: 128,
+            height: 128,
+            shadow_resolution: 512,
+            gpu_seeds,
+            technique: "geometry".into(),
+            cache: sylvan_render::bake::CachePolicy::Off,
+            ..Default::default()
+        };
+        let mut r = Renderer::new(&gpu, &s, &[test_tree()], &options).expect("renderer");
+        let stats = r.render(&gpu, &s.camera, &s.sun).expect("frame");
+        let img = image::DynamicImage::ImageRgba8(r.read_image(&gpu).unwrap()).into_rgb8();
+        (img, stats)
+    };
+    let (cpu, cpu_stats) = frame(false);
+    let (seeded, gpu_stats) = frame(true);
+    let (wc, wg) = (
+        &cpu_stats.technique_stats["world"],
+        &gpu_stats.technique_stats["world"],
+    );
+    assert_eq!(wc["tiles_seeded"], 0.0);
+    // 25 tiles; the placed trees' row (z = 60 m, x = 40 … 139 m) keeps tiles 0–2 of rows 0–1
+    // (within the pattern radius) on the CPU.
+    assert!(
+        wg["tiles_seeded"] >= 15.0 && wg["tiles_seeded"] < 25.0,
+        "{wg:?}"
+    );
+    assert_eq!(wg["trees_resident"], wc["trees_resident"]);
+    assert!(
+        cpu_stats.trees_drawn["geometry"] > 200,
+        "{:?}",
+        cpu_stats.trees_drawn
+    );
+    assert_eq!(gpu_stats.trees_drawn, cpu_stats.trees_drawn);
+    assert_eq!(gpu_stats.triangles, cpu_stats.triangles);
+    assert_eq!(gpu_stats.shadow_triangles, cpu_stats.shadow_triangles);
+    let f = sylvan_eval::flip(&cpu, &seeded).unwrap();
+    assert!(f.mean <= 0.001, "FLIP {}", f.mean);
+}
+
 #[test]
 fn tiles_stream_within_range_and_leave_under_the_budget() {
+    for method in [PlacementMethod::Tiled, PlacementMethod::Wang] {
+        tiles_stream(method);
+    }
+}
+
+/// Under `wang` the tiles are seeded on the GPU (pages allocated for the candidates, the
+/// tail freed), under `tiled` produced by the CPU workers: the same counts either way.
+fn tiles_stream(method: PlacementMethod) {
     let gpu = gpu();
     let world = sylvan_scene::World {
         tile_m: 64.0,
@@ -109,7 +177,7 @@ fn tiles_stream_within_range_and_leave_under_the_budget() {
         prefetch_m: 64.0,
         cache_mib: 1,
     };
-    let s = forest_scene(1200.0, 800.0, world);
+    let s = forest_scene_with(1200.0, 800.0, world, method);
     let options = RenderOptions {
         width: 96,
         height: 96,
@@ -117,7 +185,7 @@ fn tiles_stream_within_range_and_leave_under_the_budget() {
         ..Default::default()
     };
     let mut r = Renderer::new(&gpu, &s, &[test_tree()], &options).expect("renderer");
-    let mut evicted = 0.0;
+    let (mut evicted, mut seeded) = (0.0, 0.0);
     for step in 0..8 {
         // Fly along the diagonal, looking ahead.
         let at = Vec2::splat(100.0 + step as f32 * 130.0);
@@ -129,6 +197,7 @@ fn tiles_stream_within_range_and_leave_under_the_budget() {
         let stats = r.render(&gpu, &camera, &s.sun).expect("frame");
         let w = &stats.technique_stats["world"];
         evicted += w["tiles_evicted"];
+        seeded += w["tiles_seeded"];
         // Tiles within 150 + 64 m: at most a 7 × 7 block; the pool holds what is in range.
         assert!(w["tiles_resident"] <= 49.0 + 49.0, "{w:?}");
         // What the camera pass drew: exactly the trees within range in the frustum, counted
@@ -156,12 +225,17 @@ fn tiles_stream_within_range_and_leave_under_the_budget() {
         // Float rounding at the edge may differ by a tree or two between CPU and GPU.
         assert!(
             drawn.abs_diff(expected) <= 2 && expected > 100,
-            "step {step}: drew {drawn}, expected {expected}"
+            "{method:?} step {step}: drew {drawn}, expected {expected}"
         );
     }
     assert!(
         evicted > 0.0,
-        "a 1 MiB cache must evict as the camera flies on"
+        "{method:?}: a 1 MiB cache must evict as the camera flies on"
+    );
+    assert_eq!(
+        seeded > 0.0,
+        method == PlacementMethod::Wang,
+        "{seeded} tiles seeded"
     );
 }
 

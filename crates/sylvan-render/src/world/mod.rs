@@ -1,6 +1,7 @@
 //! The tiled world and the GPU-driven frame (#15): the terrain is split into square tiles; a
-//! tile's trees are produced on worker threads when it first comes within range (view or
-//! shadow, plus a prefetch ring), kept in one GPU pool of fixed-size pages under a memory
+//! tile's trees are produced when it first comes within range (view or shadow, plus a
+//! prefetch ring) — on the GPU for a `wang` forest (`seed.rs`, BN12 §4), else on worker
+//! threads — kept in one GPU pool of fixed-size pages under a memory
 //! budget, and evicted, farthest first, when the budget is exceeded. Per frame the CPU culls
 //! *tiles* against the camera and each cascade and lays out one instance list per (pass,
 //! species); a compute pass culls the *trees* of those tiles, appends the survivors to their
@@ -20,6 +21,7 @@
 pub mod cover;
 mod cull;
 mod produce;
+mod seed;
 
 pub use cull::{Culled, IndirectDraw, ListLayout, ListRequest, intersect_windows};
 
@@ -41,6 +43,10 @@ pub const PASSES: usize = 1 + CASCADES;
 /// Tiles of the prefetch ring inserted into the pool per frame, at most (bytes; tiles a pass
 /// sees are always inserted at once).
 const INSERT_BYTES_PER_FRAME: u64 = 1 << 20;
+
+/// Tiles of the prefetch ring seeded on the GPU per frame, at most (tiles a pass sees are
+/// always seeded at once).
+const SEED_TILES_PER_FRAME: usize = 16;
 
 /// Trees fade out over the last 10 % of a finite `[world] tree_distance_m` (their presence,
 /// as the level-of-detail cross-fades), so none pops at the edge.
@@ -121,6 +127,8 @@ pub struct WorldStats {
     pub tiles_waited: u32,
     /// Tiles evicted this frame.
     pub tiles_evicted: u32,
+    /// Tiles seeded on the GPU this frame (also counted as produced and inserted).
+    pub tiles_seeded: u32,
     /// Trees resident in the pool.
     pub trees_resident: u64,
     /// Trees in the tiles the camera pass may see (the tree cull's input).
@@ -145,6 +153,7 @@ impl WorldStats {
             ("tiles_queued", self.tiles_queued as f64),
             ("tiles_waited", self.tiles_waited as f64),
             ("tiles_evicted", self.tiles_evicted as f64),
+            ("tiles_seeded", self.tiles_seeded as f64),
             ("trees_resident", self.trees_resident as f64),
             ("trees_considered", self.trees_considered as f64),
             ("trees_drawn_camera", self.trees_drawn[0] as f64),
@@ -170,6 +179,9 @@ pub struct World {
     /// Tiles along X and Z.
     tiles: [i32; 2],
     producer: Producer<TileTrees>,
+    /// The GPU seed producer (a `wang` forest; `None`: every tile from `producer`).
+    seeds: Option<seed::GpuSeeds>,
+    source: Arc<Source>,
     resident: HashMap<TileKey, Resident>,
     /// Produced, not inserted yet (see [`INSERT_BYTES_PER_FRAME`]).
     arrived: Vec<TileTrees>,
@@ -192,6 +204,7 @@ impl World {
         scene: &Scene,
         source: Arc<Source>,
         requests: &[ListRequest],
+        gpu_seeds: bool,
     ) -> Result<Self, RenderError> {
         let bounds = &source.bounds;
         let settings = scene.world;
@@ -226,13 +239,26 @@ impl World {
             .iter()
             .map(|r| cull::Cull::new(gpu, bounds, r.layout, binding))
             .collect::<Result<Vec<_>, _>>()?;
+        let seeds = match (&source.seeded, gpu_seeds) {
+            (Some(forest), true) => {
+                seed::GpuSeeds::new(gpu, forest, &source.terrain, bounds, tile_m)
+            }
+            _ => None,
+        };
+        let worker_source = source.clone();
         Ok(Self {
             // The cache holds what the budget allows and the pool's one binding can address.
             budget_bytes: (settings.cache_mib as u64 * (1 << 20))
                 .min(max_pool_pages as u64 * PAGE as u64 * TREE_BYTES),
             settings,
             tiles,
-            producer: Producer::new(Arc::new(move |k| source.produce(k)), threads, "tiles"),
+            producer: Producer::new(
+                Arc::new(move |k| worker_source.produce(k)),
+                threads,
+                "tiles",
+            ),
+            seeds,
+            source,
             resident: HashMap::new(),
             arrived: Vec::new(),
             free_pages: (0..pool_pages).rev().collect(),
@@ -267,7 +293,9 @@ impl World {
 
     /// GPU bytes held (pool, lists, arguments).
     pub fn bytes(&self) -> u64 {
-        self.pool.size() + self.culls.iter().map(cull::Cull::bytes).sum::<u64>()
+        self.pool.size()
+            + self.culls.iter().map(cull::Cull::bytes).sum::<u64>()
+            + self.seeds.as_ref().map_or(0, seed::GpuSeeds::bytes)
     }
 
     /// Tiles within `range` of `eye` (horizontal), nearest first, with their distances.
@@ -307,10 +335,16 @@ impl World {
         let range = self.settings.tree_distance_m.min(view.far);
         let mut stats = WorldStats::default();
         // 1. Ask for every tile within range plus the ring, nearest first; forget the rest.
+        // Tiles the GPU can seed are planned here instead (nearest first).
         let wanted = self.tiles_within(eye, range + self.settings.prefetch_m);
+        let mut plans = Vec::new();
         for &(d, key) in &wanted {
-            if !self.resident.contains_key(&key) && !self.arrived.iter().any(|a| a.key == key) {
-                self.producer.request(key, d);
+            if self.resident.contains_key(&key) || self.arrived.iter().any(|a| a.key == key) {
+                continue;
+            }
+            match self.seed_plan(key) {
+                Some(plan) => plans.push((d, plan)),
+                None => self.producer.request(key, d),
             }
         }
         let wanted_set: std::collections::HashSet<TileKey> = wanted.iter().map(|w| w.1).collect();
@@ -365,6 +399,20 @@ impl World {
         stats.tiles_inserted = batch.len() as u32;
         for tile in batch {
             self.insert(gpu, tile)?;
+        }
+        // 3b. GPU seeds: every planned tile a pass sees, and the nearest of the ring.
+        let mut ring = 0;
+        plans.retain(|(d, p)| {
+            let seen = *d <= range && self.tile_may_be_seen(p.key, view);
+            ring += usize::from(!seen);
+            seen || ring <= SEED_TILES_PER_FRAME
+        });
+        if !plans.is_empty() {
+            let plans: Vec<seed::SeedPlan> = plans.into_iter().map(|(_, p)| p).collect();
+            let n = self.seed(gpu, eye, range, plans, &mut stats)?;
+            stats.tiles_seeded = n;
+            stats.tiles_produced += n;
+            stats.tiles_inserted += n;
         }
         // 4. Tiles per pass → pages and list capacities (per request: the tiles reaching
         // into its band); the GPU culls the trees.
@@ -494,18 +542,72 @@ impl World {
             .any(|f| f.intersects_box(min, max))
     }
 
+    /// The GPU seed plan of tile `key`, when the GPU seeds it: a `wang` forest, no placed
+    /// trees in the tile and no fixed tree near it.
+    fn seed_plan(&self, key: TileKey) -> Option<seed::SeedPlan> {
+        let seeds = self.seeds.as_ref()?;
+        if self.source.placed.contains_key(&key) {
+            return None;
+        }
+        seeds.plan(key)
+    }
+
+    /// Seeds `plans` on the GPU: room for their candidates (evicting), pages, one dispatch,
+    /// the results read back, the unused tail pages freed. Returns the tiles made resident.
+    fn seed(
+        &mut self,
+        gpu: &Gpu,
+        eye: Vec2,
+        range: f32,
+        plans: Vec<seed::SeedPlan>,
+        stats: &mut WorldStats,
+    ) -> Result<u32, RenderError> {
+        let incoming = plans.iter().map(|p| seed::page_bytes(p.candidates)).sum();
+        stats.tiles_evicted += self.evict(eye, range, incoming);
+        let mut pages = Vec::with_capacity(plans.len());
+        for p in &plans {
+            pages.push(self.alloc_pages(gpu, p.candidates)?);
+        }
+        let seeds = self
+            .seeds
+            .as_ref()
+            .expect("plans come from the seed producer");
+        let results = seeds.run(gpu, &self.pool, &plans, &pages)?;
+        let n = plans.len() as u32;
+        for ((plan, mut pages), r) in plans.into_iter().zip(pages).zip(results) {
+            self.free_pages
+                .extend(pages.drain(r.count.div_ceil(PAGE) as usize..).rev());
+            self.resident.insert(
+                plan.key,
+                Resident {
+                    pages,
+                    count: r.count,
+                    species_counts: r.species_counts,
+                    min: r.min,
+                    max: r.max,
+                },
+            );
+        }
+        Ok(n)
+    }
+
+    /// Pages for `n` trees (growing the pool if it must).
+    fn alloc_pages(&mut self, gpu: &Gpu, n: u32) -> Result<Vec<u32>, RenderError> {
+        let need = n.div_ceil(PAGE) as usize;
+        while self.free_pages.len() < need {
+            self.grow_pool(gpu, need)?;
+        }
+        Ok((0..need)
+            .map(|_| self.free_pages.pop().expect("enough pages"))
+            .collect())
+    }
+
     fn insert(&mut self, gpu: &Gpu, tile: TileTrees) -> Result<(), RenderError> {
         if self.resident.contains_key(&tile.key) {
             return Ok(());
         }
         let n = tile.trees.len() as u32;
-        let need = n.div_ceil(PAGE) as usize;
-        while self.free_pages.len() < need {
-            self.grow_pool(gpu, need)?;
-        }
-        let pages: Vec<u32> = (0..need)
-            .map(|_| self.free_pages.pop().expect("enough pages"))
-            .collect();
+        let pages = self.alloc_pages(gpu, n)?;
         // One write per run of consecutive pages (usually the whole tile).
         let mut i = 0;
         while i < pages.len() {

@@ -48,6 +48,10 @@ pub struct ViewArgs {
     /// what the camera sees (the frame before the caster cull; for comparisons).
     #[arg(long)]
     pub no_caster_cull: bool,
+    /// Produce a `wang` forest's trees on the CPU workers only, not on the GPU (the frame
+    /// before the GPU seed producer; for comparisons — the trees are the same).
+    #[arg(long)]
+    pub cpu_seeds: bool,
     #[command(flatten)]
     pub bake: BakeArgs,
 }
@@ -243,6 +247,7 @@ impl ViewArgs {
             cache: self.bake.cache(),
             cpu_driven: self.cpu_driven,
             caster_cull: !self.no_caster_cull,
+            gpu_seeds: !self.cpu_seeds,
             ..Default::default()
         };
         options.factor()?;
