@@ -104,8 +104,9 @@ impl Scene {
     /// The built-in scene, shown when the CLI gets no scene file: a forest to the horizon —
     /// 10.24 km × 10.24 km of procedural hills (300 m relief) wooded with pine on the heights,
     /// beech on the slopes, prunus in the valleys and bushes in the clearings and meadows, from
-    /// procedural density maps (≈ 3 M trees, [`Scene::estimated_trees`]), produced tile by tile
-    /// as they come within range (nothing is placed at load), drawn by
+    /// procedural density maps (≈ 4.9 M trees, [`Scene::estimated_trees`]), `wang` placement
+    /// produced tile by tile as they come within range (nothing is placed at load; seeded on
+    /// the GPU by the renderer's tiled world), drawn by
     /// [`BUILTIN_FOREST_CHAIN`] (`--technique auto`) with [`BUILTIN_FOREST_PARAMS`]. The sun is 40° high; the camera
     /// ([`Camera::overview`]) looks across the hills from a raised corner. Needs no files;
     /// deterministic.
@@ -120,7 +121,7 @@ impl Scene {
         ];
         let maps: [DensityMap; 4] = density_maps(&terrain, &FOREST_MAPS);
         let layouts = layouts_of(&species, maps, [420.0, 320.0, 300.0, 260.0]);
-        let seeded = SeededForest::with_method(size, &layouts, 2024, PlacementMethod::Tiled, &[])
+        let seeded = SeededForest::with_method(size, &layouts, 2024, PlacementMethod::Wang, &[])
             .expect("the built-in forest is within the limits")
             .map(std::sync::Arc::new);
         Scene {

@@ -44,9 +44,18 @@ pub const PASSES: usize = 1 + CASCADES;
 /// sees are always inserted at once).
 const INSERT_BYTES_PER_FRAME: u64 = 1 << 20;
 
-/// Tiles of the prefetch ring seeded on the GPU per frame, at most (tiles a pass sees are
-/// always seeded at once).
+/// Tiles of the prefetch ring seeded on the GPU per frame, at most, and batches of them in
+/// flight (their results are read in a later frame, without waiting; tiles a pass sees are
+/// seeded and read back at once).
 const SEED_TILES_PER_FRAME: usize = 16;
+const SEED_BATCHES_IN_FLIGHT: usize = 2;
+
+/// Ring tiles seeded on the GPU, results not read yet.
+struct SeedBatch {
+    keys: Vec<TileKey>,
+    pages: Vec<Vec<u32>>,
+    pending: seed::Pending,
+}
 
 /// Trees fade out over the last 10 % of a finite `[world] tree_distance_m` (their presence,
 /// as the level-of-detail cross-fades), so none pops at the edge.
@@ -181,6 +190,7 @@ pub struct World {
     producer: Producer<TileTrees>,
     /// The GPU seed producer (a `wang` forest; `None`: every tile from `producer`).
     seeds: Option<seed::GpuSeeds>,
+    seeding: Vec<SeedBatch>,
     source: Arc<Source>,
     resident: HashMap<TileKey, Resident>,
     /// Produced, not inserted yet (see [`INSERT_BYTES_PER_FRAME`]).
@@ -258,6 +268,7 @@ impl World {
                 "tiles",
             ),
             seeds,
+            seeding: Vec::new(),
             source,
             resident: HashMap::new(),
             arrived: Vec::new(),
@@ -339,7 +350,10 @@ impl World {
         let wanted = self.tiles_within(eye, range + self.settings.prefetch_m);
         let mut plans = Vec::new();
         for &(d, key) in &wanted {
-            if self.resident.contains_key(&key) || self.arrived.iter().any(|a| a.key == key) {
+            if self.resident.contains_key(&key)
+                || self.arrived.iter().any(|a| a.key == key)
+                || self.seeding.iter().any(|b| b.keys.contains(&key))
+            {
                 continue;
             }
             match self.seed_plan(key) {
@@ -400,20 +414,28 @@ impl World {
         for tile in batch {
             self.insert(gpu, tile)?;
         }
-        // 3b. GPU seeds: every planned tile a pass sees, and the nearest of the ring.
-        let mut ring = 0;
-        plans.retain(|(d, p)| {
-            let seen = *d <= range && self.tile_may_be_seen(p.key, view);
-            ring += usize::from(!seen);
-            seen || ring <= SEED_TILES_PER_FRAME
-        });
-        if !plans.is_empty() {
-            let plans: Vec<seed::SeedPlan> = plans.into_iter().map(|(_, p)| p).collect();
-            let n = self.seed(gpu, eye, range, plans, &mut stats)?;
-            stats.tiles_seeded = n;
-            stats.tiles_produced += n;
-            stats.tiles_inserted += n;
+        // 3b. GPU seeds: ring batches the GPU has finished; every planned tile a pass sees
+        // (waited for), and the nearest of the ring (read in a later frame).
+        stats.tiles_seeded = self.collect_seeded(gpu, false)?;
+        let (seen, ring): (Vec<_>, Vec<_>) = plans
+            .into_iter()
+            .partition(|(d, p)| *d <= range && self.tile_may_be_seen(p.key, view));
+        if !seen.is_empty() {
+            let plans: Vec<seed::SeedPlan> = seen.into_iter().map(|(_, p)| p).collect();
+            stats.tiles_waited += plans.len() as u32;
+            stats.tiles_evicted += self.seed(gpu, eye, range, plans)?;
+            stats.tiles_seeded += self.collect_seeded(gpu, true)?;
         }
+        if !ring.is_empty() && self.seeding.len() < SEED_BATCHES_IN_FLIGHT {
+            let plans = ring
+                .into_iter()
+                .take(SEED_TILES_PER_FRAME)
+                .map(|(_, p)| p)
+                .collect();
+            stats.tiles_evicted += self.seed(gpu, eye, range, plans)?;
+        }
+        stats.tiles_produced += stats.tiles_seeded;
+        stats.tiles_inserted += stats.tiles_seeded;
         // 4. Tiles per pass → pages and list capacities (per request: the tiles reaching
         // into its band); the GPU culls the trees.
         let fade_start = if self.settings.tree_distance_m.is_finite() {
@@ -552,18 +574,17 @@ impl World {
         seeds.plan(key)
     }
 
-    /// Seeds `plans` on the GPU: room for their candidates (evicting), pages, one dispatch,
-    /// the results read back, the unused tail pages freed. Returns the tiles made resident.
+    /// Seeds `plans` on the GPU: room for their candidates (evicting), pages, one dispatch
+    /// ([`World::collect_seeded`] makes them resident). Returns the tiles evicted.
     fn seed(
         &mut self,
         gpu: &Gpu,
         eye: Vec2,
         range: f32,
         plans: Vec<seed::SeedPlan>,
-        stats: &mut WorldStats,
     ) -> Result<u32, RenderError> {
         let incoming = plans.iter().map(|p| seed::page_bytes(p.candidates)).sum();
-        stats.tiles_evicted += self.evict(eye, range, incoming);
+        let evicted = self.evict(eye, range, incoming);
         let mut pages = Vec::with_capacity(plans.len());
         for p in &plans {
             pages.push(self.alloc_pages(gpu, p.candidates)?);
@@ -572,21 +593,45 @@ impl World {
             .seeds
             .as_ref()
             .expect("plans come from the seed producer");
-        let results = seeds.run(gpu, &self.pool, &plans, &pages)?;
-        let n = plans.len() as u32;
-        for ((plan, mut pages), r) in plans.into_iter().zip(pages).zip(results) {
-            self.free_pages
-                .extend(pages.drain(r.count.div_ceil(PAGE) as usize..).rev());
-            self.resident.insert(
-                plan.key,
-                Resident {
-                    pages,
-                    count: r.count,
-                    species_counts: r.species_counts,
-                    min: r.min,
-                    max: r.max,
-                },
-            );
+        let pending = seeds.dispatch(gpu, &self.pool, &plans, &pages);
+        self.seeding.push(SeedBatch {
+            keys: plans.iter().map(|p| p.key).collect(),
+            pages,
+            pending,
+        });
+        Ok(evicted)
+    }
+
+    /// Makes the tiles of finished seed batches resident (every batch, waiting for the GPU,
+    /// when `wait`), freeing the pages their trees did not fill; returns how many.
+    fn collect_seeded(&mut self, gpu: &Gpu, wait: bool) -> Result<u32, RenderError> {
+        let mut n = 0;
+        let mut i = 0;
+        while i < self.seeding.len() {
+            let results = match wait {
+                true => Some(self.seeding[i].pending.finish(gpu)?),
+                false => self.seeding[i].pending.poll(gpu)?,
+            };
+            let Some(results) = results else {
+                i += 1;
+                continue;
+            };
+            let batch = self.seeding.remove(i);
+            for ((key, mut pages), r) in batch.keys.into_iter().zip(batch.pages).zip(results) {
+                self.free_pages
+                    .extend(pages.drain(r.count.div_ceil(PAGE) as usize..).rev());
+                self.resident.insert(
+                    key,
+                    Resident {
+                        pages,
+                        count: r.count,
+                        species_counts: r.species_counts,
+                        min: r.min,
+                        max: r.max,
+                    },
+                );
+                n += 1;
+            }
         }
         Ok(n)
     }

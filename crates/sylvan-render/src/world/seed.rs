@@ -278,7 +278,9 @@ impl GpuSeeds {
     }
 
     /// Seeds `plans` into `pool`, plan `i` into the pages `pages[i]` (at least
-    /// `plans[i].candidates.div_ceil(PAGE)` of them), submits, and reads the results back.
+    /// `plans[i].candidates.div_ceil(PAGE)` of them), submits, and reads the results back
+    /// (waiting for the GPU).
+    #[cfg(test)]
     pub fn run(
         &self,
         gpu: &Gpu,
@@ -286,9 +288,19 @@ impl GpuSeeds {
         plans: &[SeedPlan],
         pages: &[Vec<u32>],
     ) -> Result<Vec<Seeded>, RenderError> {
-        if plans.is_empty() {
-            return Ok(Vec::new());
-        }
+        let pending = self.dispatch(gpu, pool, plans, pages);
+        pending.finish(gpu)
+    }
+
+    /// [`GpuSeeds::run`] without waiting: submits the dispatch and a copy of its results to a
+    /// mapped buffer; the results are read once the GPU is done ([`Pending::poll`]).
+    pub fn dispatch(
+        &self,
+        gpu: &Gpu,
+        pool: &wgpu::Buffer,
+        plans: &[SeedPlan],
+        pages: &[Vec<u32>],
+    ) -> Pending {
         let stride = RESULT_HEAD + self.layout_species.len();
         let mut jobs = Vec::with_capacity(plans.len());
         let mut runs = Vec::new();
@@ -341,6 +353,12 @@ impl GpuSeeds {
             bytemuck::cast_slice(&init),
             wgpu::BufferUsages::COPY_SRC,
         );
+        let staging = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("seed_results_read"),
+            size: results.size(),
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
         let entries: Vec<wgpu::BindGroupEntry> = [
             &self.params,
             &self.points,
@@ -375,9 +393,69 @@ impl GpuSeeds {
             pass.set_bind_group(0, &bind, &[]);
             pass.dispatch_workgroups(plans.len() as u32, 1, 1);
         }
+        encoder.copy_buffer_to_buffer(&results, 0, &staging, 0, results.size());
         gpu.queue.submit([encoder.finish()]);
-        let bytes = sylvan_gpu::read_buffer_bytes(gpu, &results)?;
-        let words: &[u32] = bytemuck::cast_slice(&bytes);
+        let done = Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let flag = done.clone();
+        staging.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+            // A failed map leaves `done` false; `finish` then reports the device's error.
+            if r.is_ok() {
+                flag.store(true, std::sync::atomic::Ordering::Release);
+            }
+        });
+        Pending {
+            staging,
+            done,
+            jobs: plans.len(),
+            stride,
+            layout_species: self.layout_species.clone(),
+            species: self.species,
+        }
+    }
+}
+
+/// A dispatched batch of tiles whose results are not read yet.
+pub(crate) struct Pending {
+    staging: wgpu::Buffer,
+    done: Arc<std::sync::atomic::AtomicBool>,
+    jobs: usize,
+    stride: usize,
+    layout_species: Vec<usize>,
+    species: usize,
+}
+
+impl Pending {
+    /// The results if the GPU has finished the batch (polls the device without waiting).
+    pub fn poll(&self, gpu: &Gpu) -> Result<Option<Vec<Seeded>>, RenderError> {
+        gpu.device
+            .poll(wgpu::PollType::Poll)
+            .map_err(|e| sylvan_gpu::GpuError::Wgpu(e.to_string()))?;
+        if !self.done.load(std::sync::atomic::Ordering::Acquire) {
+            return Ok(None);
+        }
+        Ok(Some(self.read()?))
+    }
+
+    /// The results, waiting for the GPU.
+    pub fn finish(&self, gpu: &Gpu) -> Result<Vec<Seeded>, RenderError> {
+        gpu.wait()?;
+        if !self.done.load(std::sync::atomic::Ordering::Acquire) {
+            return Err(RenderError::Gpu(sylvan_gpu::GpuError::Wgpu(
+                "the seed producer's results could not be mapped".into(),
+            )));
+        }
+        self.read()
+    }
+
+    fn read(&self) -> Result<Vec<Seeded>, RenderError> {
+        let slice = self.staging.slice(..);
+        let words: Vec<u32> = {
+            let view = slice
+                .get_mapped_range()
+                .map_err(|e| sylvan_gpu::GpuError::Wgpu(e.to_string()))?;
+            bytemuck::cast_slice(&view).to_vec()
+        };
+        self.staging.unmap();
         let unorder = |b: u32| {
             f32::from_bits(if b & 0x8000_0000 != 0 {
                 b & 0x7FFF_FFFF
@@ -386,8 +464,8 @@ impl GpuSeeds {
             })
         };
         Ok(words
-            .chunks(stride)
-            .take(plans.len())
+            .chunks(self.stride)
+            .take(self.jobs)
             .map(|r| {
                 let mut species_counts = vec![0u32; self.species];
                 for (l, &s) in self.layout_species.iter().enumerate() {
