@@ -102,8 +102,8 @@ bench builtin-auto-noshadows 30 "${HD[@]}" --frames 10 --no-shadows
 bench 1m-auto 45 "$C1M" "${HD[@]}" --frames 5 --technique auto
 bench 10m-auto 45 "$C10M" "${HD[@]}" --frames 5 --technique auto
 # The same 10M world under `wang`: seeded on the GPU, and on the CPU workers.
-bench 10m-wang-gpuseeds 45 "$W10M" "${HD[@]}" --frames 5 --technique auto
-bench 10m-wang-cpuseeds 45 "$W10M" "${HD[@]}" --frames 5 --technique auto --cpu-seeds
+bench 10m-wang-gpuseeds 45 "$W10M" "${HD[@]}" --frames 5 --technique auto --seeds gpu
+bench 10m-wang-cpuseeds 45 "$W10M" "${HD[@]}" --frames 5 --technique auto --seeds cpu
 # Full geometry of the 1M world (the reference of the ratios; the first batch ran it as
 # "1m-auto" without --technique auto).
 bench 1m-geometry 45 "$C1M" "${HD[@]}" --frames 3 --technique geometry
@@ -140,8 +140,8 @@ bench builtin-auto-nocull 40 "${HD[@]}" --frames 10 --no-caster-cull --set zfiel
 FLIGHT=(--technique octahedral --no-shadows --frames 120 --path assets/paths/forest-10m-flight.toml)
 W10=assets/scenes/bench/.gpu-forest-10m-flat-wang.toml
 sed 's/^method = "tiled"/method = "wang"/' assets/scenes/bench/forest-10m.toml >"$W10"
-bench flight-wang-gpuseeds 60 "$W10" "${HD[@]}" "${FLIGHT[@]}"
-bench flight-wang-cpuseeds 60 "$W10" "${HD[@]}" "${FLIGHT[@]}" --cpu-seeds
+bench flight-wang-gpuseeds 60 "$W10" "${HD[@]}" "${FLIGHT[@]}" --seeds gpu
+bench flight-wang-cpuseeds 60 "$W10" "${HD[@]}" "${FLIGHT[@]}" --seeds cpu
 # Full geometry last: the slowest, and the reference of the ratios.
 bench builtin-geometry 60 "${HD[@]}" --frames 3 --technique geometry
 bench builtin-hbt 40 "${HD[@]}" --frames 3 --technique hbt

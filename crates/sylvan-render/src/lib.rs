@@ -39,7 +39,7 @@ pub use error::RenderError;
 pub use frame::DebugView;
 pub use pipeline::{ColorOutput, DepthConvention, MainTarget};
 pub use renderer::{
-    CameraMatrices, FrameStats, Layers, PreparedFrame, RenderOptions, Renderer, load_plants,
+    CameraMatrices, FrameStats, Layers, PreparedFrame, RenderOptions, Renderer, Seeds, load_plants,
 };
 pub use technique::DrawCounts;
 pub use technique::{Technique, registry};

@@ -61,9 +61,33 @@ pub struct RenderOptions {
     /// ([`frame::CasterCull`]); off: every caster in the cascade's box (for comparisons — the
     /// pictures are the same).
     pub caster_cull: bool,
-    /// Seed a `wang` forest's tiles on the GPU ([`crate::world`]'s seed producer, BN12 §4);
-    /// off: every tile from the CPU workers (for comparisons — the same trees).
-    pub gpu_seeds: bool,
+    /// Where a `wang` forest's tiles are seeded: on the GPU ([`crate::world`]'s seed
+    /// producer, BN12 §4) or by the CPU workers (the same trees either way).
+    pub seeds: Seeds,
+}
+
+/// Where a `wang` forest's tiles are seeded ([`RenderOptions::seeds`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Seeds {
+    /// On the GPU when the adapter is hardware; on the CPU workers on a software rasteriser,
+    /// whose "GPU" is the same cores (measured: BENCHMARKS "GPU seeds").
+    #[default]
+    Auto,
+    /// Always on the GPU.
+    Gpu,
+    /// Always on the CPU workers.
+    Cpu,
+}
+
+impl Seeds {
+    /// Whether the GPU seeds on `gpu`.
+    pub fn on_gpu(self, gpu: &Gpu) -> bool {
+        match self {
+            Seeds::Auto => !gpu.is_software(),
+            Seeds::Gpu => true,
+            Seeds::Cpu => false,
+        }
+    }
 }
 
 impl Default for RenderOptions {
@@ -83,7 +107,7 @@ impl Default for RenderOptions {
             cache: CachePolicy::Default,
             cpu_driven: false,
             caster_cull: true,
-            gpu_seeds: true,
+            seeds: Seeds::Auto,
         }
     }
 }
@@ -484,7 +508,7 @@ impl Renderer {
                 scene,
                 source,
                 &requests,
-                options.gpu_seeds,
+                options.seeds.on_gpu(gpu),
             )?),
             false => None,
         };

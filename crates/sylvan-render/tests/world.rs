@@ -119,12 +119,12 @@ fn gpu_seeds_draw_what_the_cpu_workers_drew() {
         ..Default::default()
     };
     let s = forest_scene_with(300.0, 200.0, world, PlacementMethod::Wang);
-    let frame = |gpu_seeds: bool| {
+    let frame = |seeds: sylvan_render::Seeds| {
         let options = RenderOptions {
             width: 128,
             height: 128,
             shadow_resolution: 512,
-            gpu_seeds,
+            seeds,
             technique: "geometry".into(),
             cache: sylvan_render::bake::CachePolicy::Off,
             ..Default::default()
@@ -134,8 +134,8 @@ fn gpu_seeds_draw_what_the_cpu_workers_drew() {
         let img = image::DynamicImage::ImageRgba8(r.read_image(&gpu).unwrap()).into_rgb8();
         (img, stats)
     };
-    let (cpu, cpu_stats) = frame(false);
-    let (seeded, gpu_stats) = frame(true);
+    let (cpu, cpu_stats) = frame(sylvan_render::Seeds::Cpu);
+    let (seeded, gpu_stats) = frame(sylvan_render::Seeds::Gpu);
     let (wc, wg) = (
         &cpu_stats.technique_stats["world"],
         &gpu_stats.technique_stats["world"],
@@ -182,6 +182,7 @@ fn tiles_stream(method: PlacementMethod) {
         width: 96,
         height: 96,
         shadows: false,
+        seeds: sylvan_render::Seeds::Gpu,
         ..Default::default()
     };
     let mut r = Renderer::new(&gpu, &s, &[test_tree()], &options).expect("renderer");

@@ -48,10 +48,10 @@ pub struct ViewArgs {
     /// what the camera sees (the frame before the caster cull; for comparisons).
     #[arg(long)]
     pub no_caster_cull: bool,
-    /// Produce a `wang` forest's trees on the CPU workers only, not on the GPU (the frame
-    /// before the GPU seed producer; for comparisons — the trees are the same).
-    #[arg(long)]
-    pub cpu_seeds: bool,
+    /// Where a `wang` forest's tiles are seeded: `gpu`, `cpu` (the tile workers), or `auto`
+    /// (the GPU on a hardware adapter, the CPU on a software rasteriser). The trees are the same.
+    #[arg(long, value_name = "auto|gpu|cpu", default_value = "auto", value_parser = parse_seeds)]
+    pub seeds: sylvan_render::Seeds,
     #[command(flatten)]
     pub bake: BakeArgs,
 }
@@ -247,7 +247,7 @@ impl ViewArgs {
             cache: self.bake.cache(),
             cpu_driven: self.cpu_driven,
             caster_cull: !self.no_caster_cull,
-            gpu_seeds: !self.cpu_seeds,
+            seeds: self.seeds,
             ..Default::default()
         };
         options.factor()?;
@@ -363,6 +363,16 @@ pub fn load_path(path: &Path, camera_flag: Option<&str>) -> Result<sylvan_scene:
         );
     }
     Ok(sylvan_scene::CameraPath::load(path)?)
+}
+
+/// `--seeds auto|gpu|cpu`.
+fn parse_seeds(s: &str) -> Result<sylvan_render::Seeds, String> {
+    match s {
+        "auto" => Ok(sylvan_render::Seeds::Auto),
+        "gpu" => Ok(sylvan_render::Seeds::Gpu),
+        "cpu" => Ok(sylvan_render::Seeds::Cpu),
+        _ => Err(format!("'{s}': write auto, gpu or cpu")),
+    }
 }
 
 #[cfg(test)]
