@@ -348,7 +348,7 @@ impl World {
         // 1. Ask for every tile within range plus the ring, nearest first; forget the rest.
         // Tiles the GPU can seed are planned here instead (nearest first).
         let wanted = self.tiles_within(eye, range + self.settings.prefetch_m);
-        let mut plans = Vec::new();
+        let mut gpu_tiles = Vec::new();
         for &(d, key) in &wanted {
             if self.resident.contains_key(&key)
                 || self.arrived.iter().any(|a| a.key == key)
@@ -356,9 +356,9 @@ impl World {
             {
                 continue;
             }
-            match self.seed_plan(key) {
-                Some(plan) => plans.push((d, plan)),
-                None => self.producer.request(key, d),
+            match self.gpu_seeds(key) {
+                true => gpu_tiles.push((d, key)),
+                false => self.producer.request(key, d),
             }
         }
         let wanted_set: std::collections::HashSet<TileKey> = wanted.iter().map(|w| w.1).collect();
@@ -417,21 +417,29 @@ impl World {
         // 3b. GPU seeds: ring batches the GPU has finished; every planned tile a pass sees
         // (waited for), and the nearest of the ring (read in a later frame).
         stats.tiles_seeded = self.collect_seeded(gpu, false)?;
-        let (seen, ring): (Vec<_>, Vec<_>) = plans
+        // (Planned only when dispatched: the ring beyond this frame's share costs nothing.)
+        let (seen, ring): (Vec<_>, Vec<_>) = gpu_tiles
             .into_iter()
-            .partition(|(d, p)| *d <= range && self.tile_may_be_seen(p.key, view));
+            .partition(|&(d, k)| d <= range && self.tile_may_be_seen(k, view));
+        let plan = |tiles: &mut dyn Iterator<Item = (f32, TileKey)>, seeds: &seed::GpuSeeds| {
+            tiles.map(|(_, k)| seeds.plan(k)).collect::<Vec<_>>()
+        };
         if !seen.is_empty() {
-            let plans: Vec<seed::SeedPlan> = seen.into_iter().map(|(_, p)| p).collect();
+            let seeds = self
+                .seeds
+                .as_ref()
+                .expect("GPU tiles need the seed producer");
+            let plans = plan(&mut seen.into_iter(), seeds);
             stats.tiles_waited += plans.len() as u32;
             stats.tiles_evicted += self.seed(gpu, eye, range, plans)?;
             stats.tiles_seeded += self.collect_seeded(gpu, true)?;
         }
         if !ring.is_empty() && self.seeding.len() < SEED_BATCHES_IN_FLIGHT {
-            let plans = ring
-                .into_iter()
-                .take(SEED_TILES_PER_FRAME)
-                .map(|(_, p)| p)
-                .collect();
+            let seeds = self
+                .seeds
+                .as_ref()
+                .expect("GPU tiles need the seed producer");
+            let plans = plan(&mut ring.into_iter().take(SEED_TILES_PER_FRAME), seeds);
             stats.tiles_evicted += self.seed(gpu, eye, range, plans)?;
         }
         stats.tiles_produced += stats.tiles_seeded;
@@ -564,14 +572,12 @@ impl World {
             .any(|f| f.intersects_box(min, max))
     }
 
-    /// The GPU seed plan of tile `key`, when the GPU seeds it: a `wang` forest, no placed
-    /// trees in the tile and no fixed tree near it.
-    fn seed_plan(&self, key: TileKey) -> Option<seed::SeedPlan> {
-        let seeds = self.seeds.as_ref()?;
-        if self.source.placed.contains_key(&key) {
-            return None;
-        }
-        seeds.plan(key)
+    /// Whether the GPU seeds tile `key`: a `wang` forest, no placed trees in the tile and no
+    /// fixed tree near it.
+    fn gpu_seeds(&self, key: TileKey) -> bool {
+        self.seeds
+            .as_ref()
+            .is_some_and(|s| !self.source.placed.contains_key(&key) && s.accepts(key))
     }
 
     /// Seeds `plans` on the GPU: room for their candidates (evicting), pages, one dispatch

@@ -247,14 +247,22 @@ impl GpuSeeds {
         self.bytes
     }
 
-    /// The plan of tile `key`, or `None` when the GPU cannot seed it (a fixed tree within the
-    /// pattern radius: the CPU producer keeps the trees clear of it).
-    pub fn plan(&self, key: TileKey) -> Option<SeedPlan> {
+    /// Tile `key`'s rectangle.
+    fn rect(&self, key: TileKey) -> (Vec2, Vec2) {
         let min = Vec2::new(key.x as f32, key.z as f32) * self.tile_m;
-        let max = min + Vec2::splat(self.tile_m);
-        if self.forest.blocked_near(min, max) {
-            return None;
-        }
+        (min, min + Vec2::splat(self.tile_m))
+    }
+
+    /// Whether the GPU can seed tile `key`: no fixed tree within the pattern radius of it
+    /// (the CPU producer keeps the trees clear of those).
+    pub fn accepts(&self, key: TileKey) -> bool {
+        let (min, max) = self.rect(key);
+        !self.forest.blocked_near(min, max)
+    }
+
+    /// The plan of tile `key` (one [`GpuSeeds::accepts`]).
+    pub fn plan(&self, key: TileKey) -> SeedPlan {
+        let (min, max) = self.rect(key);
         let mut runs = Vec::new();
         let (min, max) = self.forest.candidate_runs(min, max, &mut runs);
         let mut candidates = 0u32;
@@ -268,13 +276,13 @@ impl GpuSeeds {
                 })
                 .count() as u32;
         }
-        Some(SeedPlan {
+        SeedPlan {
             key,
             runs,
             min,
             max,
             candidates,
-        })
+        }
     }
 
     /// Seeds `plans` into `pool`, plan `i` into the pages `pages[i]` (at least
@@ -575,7 +583,8 @@ mod tests {
             .flat_map(|z| (0..6).map(move |x| TileKey { x, z }))
             .chain([TileKey { x: 9, z: 9 }])
             .collect();
-        let plans: Vec<SeedPlan> = keys.iter().map(|&k| seeds.plan(k).unwrap()).collect();
+        assert!(keys.iter().all(|&k| seeds.accepts(k)));
+        let plans: Vec<SeedPlan> = keys.iter().map(|&k| seeds.plan(k)).collect();
         // Pages handed out back to front and interleaved, as a used pool would.
         let total: u32 = plans.iter().map(|p| p.candidates.div_ceil(PAGE)).sum();
         let mut free: Vec<u32> = (0..total).collect();
@@ -684,12 +693,12 @@ mod tests {
             128.0,
         )
         .unwrap();
-        assert!(seeds.plan(TileKey { x: 1, z: 2 }).is_none());
+        assert!(!seeds.accepts(TileKey { x: 1, z: 2 }));
         assert!(
-            seeds.plan(TileKey { x: 0, z: 2 }).is_none(),
+            !seeds.accepts(TileKey { x: 0, z: 2 }),
             "within r of the edge"
         );
-        assert!(seeds.plan(TileKey { x: 3, z: 2 }).is_some());
-        assert!(seeds.plan(TileKey { x: 1, z: 0 }).is_some());
+        assert!(seeds.accepts(TileKey { x: 3, z: 2 }));
+        assert!(seeds.accepts(TileKey { x: 1, z: 0 }));
     }
 }
