@@ -719,9 +719,14 @@ impl World {
         (self.pool_pages - self.free_pages.len() as u32) as u64 * PAGE as u64 * TREE_BYTES
     }
 
-    /// Evicts the farthest tiles out of `range` until `incoming` more bytes fit the budget.
+    /// Evicts the farthest tiles out of `range` until `incoming` more bytes fit the pool as it
+    /// is (so the pool grows — a copy of all of it, a hitch — only for tiles in range), and
+    /// never past the budget.
     fn evict(&mut self, eye: Vec2, range: f32, incoming: u64) -> u32 {
-        if self.resident_bytes() + incoming <= self.budget_bytes {
+        let limit = self
+            .budget_bytes
+            .min(self.pool_pages as u64 * PAGE as u64 * TREE_BYTES);
+        if self.resident_bytes() + incoming <= limit {
             return 0;
         }
         let t = self.settings.tile_m;
@@ -734,7 +739,7 @@ impl World {
         far.sort_by(|a, b| b.0.total_cmp(&a.0));
         let mut evicted = 0;
         for (_, key) in far {
-            if self.resident_bytes() + incoming <= self.budget_bytes {
+            if self.resident_bytes() + incoming <= limit {
                 break;
             }
             if let Some(r) = self.resident.remove(&key) {
