@@ -197,6 +197,10 @@ fn bad_flags_give_one_line_errors() {
     );
     assert_one_line_error(&sylvan(&["render", scene, "--sun", "40"], &dir), &["--sun"]);
     assert_one_line_error(
+        &sylvan(&["render", scene, "--seeds", "fast"], &dir),
+        &["--seeds", "auto, gpu or cpu"],
+    );
+    assert_one_line_error(
         &sylvan(&["bench", scene, "--frames", "0"], &dir),
         &["--frames 0"],
     );
