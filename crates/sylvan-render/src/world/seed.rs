@@ -9,8 +9,10 @@
 //! Deviations from BN12 §4: the candidates are Poisson-disk Wang tiles' points thinned by
 //! hashed numbers (the CPU's `wang` placement) rather than BN12's precomputed seed textures;
 //! tiles with placed trees, or near a fixed tree the seeds must keep clear of, stay on the CPU
-//! producer (a spatial query the shader does not make); and the results are read back in the
-//! frame that produces them (one short stall per frame that produces tiles).
+//! producer (a spatial query the shader does not make). The results of tiles a pass sees are
+//! read back in their frame (one short wait); ring tiles' a frame or two later, without waiting
+//! ([`Pending::poll`]). [`crate::Seeds::Auto`] uses it on hardware adapters only: on a software
+//! rasteriser the compute pass shares the tile workers' cores (BENCHMARKS "A real GPU").
 
 use super::{PAGE, TREE_BYTES, TileKey};
 use crate::RenderError;
