@@ -57,11 +57,22 @@ fn frame(
     technique: &str,
     cpu_driven: bool,
 ) -> (image::RgbImage, sylvan_render::FrameStats) {
+    frame_with(gpu, s, technique, cpu_driven, sylvan_render::Seeds::Auto)
+}
+
+fn frame_with(
+    gpu: &sylvan_gpu::Gpu,
+    s: &sylvan_scene::Scene,
+    technique: &str,
+    cpu_driven: bool,
+    seeds: sylvan_render::Seeds,
+) -> (image::RgbImage, sylvan_render::FrameStats) {
     let options = RenderOptions {
         width: 128,
         height: 128,
         shadow_resolution: 512,
         cpu_driven,
+        seeds,
         technique: technique.into(),
         cache: sylvan_render::bake::CachePolicy::Off,
         ..Default::default()
@@ -119,21 +130,7 @@ fn gpu_seeds_draw_what_the_cpu_workers_drew() {
         ..Default::default()
     };
     let s = forest_scene_with(300.0, 200.0, world, PlacementMethod::Wang);
-    let frame = |seeds: sylvan_render::Seeds| {
-        let options = RenderOptions {
-            width: 128,
-            height: 128,
-            shadow_resolution: 512,
-            seeds,
-            technique: "geometry".into(),
-            cache: sylvan_render::bake::CachePolicy::Off,
-            ..Default::default()
-        };
-        let mut r = Renderer::new(&gpu, &s, &[test_tree()], &options).expect("renderer");
-        let stats = r.render(&gpu, &s.camera, &s.sun).expect("frame");
-        let img = image::DynamicImage::ImageRgba8(r.read_image(&gpu).unwrap()).into_rgb8();
-        (img, stats)
-    };
+    let frame = |seeds| frame_with(&gpu, &s, "geometry", false, seeds);
     let (cpu, cpu_stats) = frame(sylvan_render::Seeds::Cpu);
     let (seeded, gpu_stats) = frame(sylvan_render::Seeds::Gpu);
     let (wc, wg) = (

@@ -395,12 +395,10 @@ impl World {
             let (ka, kb) = (key(a), key(b));
             ka.0.cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
         });
-        let bytes_of =
-            |t: &TileTrees| (t.trees.len() as u64).div_ceil(PAGE as u64) * PAGE as u64 * TREE_BYTES;
         let mut take = 0;
         let mut incoming = 0u64;
         for tile in &self.arrived {
-            let b = bytes_of(tile);
+            let b = page_bytes(tile.trees.len() as u32);
             if !visible.contains(&tile.key) && incoming + b > INSERT_BYTES_PER_FRAME && take > 0 {
                 break;
             }
@@ -589,7 +587,7 @@ impl World {
         range: f32,
         plans: Vec<seed::SeedPlan>,
     ) -> Result<u32, RenderError> {
-        let incoming = plans.iter().map(|p| seed::page_bytes(p.candidates)).sum();
+        let incoming = plans.iter().map(|p| page_bytes(p.candidates)).sum();
         let evicted = self.evict(eye, range, incoming);
         let mut pages = Vec::with_capacity(plans.len());
         for p in &plans {
@@ -768,6 +766,11 @@ fn pool_buffer(gpu: &Gpu, pages: u32) -> wgpu::Buffer {
             | wgpu::BufferUsages::COPY_SRC,
         mapped_at_creation: false,
     })
+}
+
+/// Pool bytes of `n` trees in whole pages.
+fn page_bytes(n: u32) -> u64 {
+    n.div_ceil(PAGE) as u64 * PAGE as u64 * TREE_BYTES
 }
 
 /// Distance from `p` to the box (0 inside).

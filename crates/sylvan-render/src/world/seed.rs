@@ -14,14 +14,14 @@
 //! ([`Pending::poll`]). [`crate::Seeds::Auto`] uses it on hardware adapters only: on a software
 //! rasteriser the compute pass shares the tile workers' cores (BENCHMARKS "A real GPU").
 
-use super::{PAGE, TREE_BYTES, TileKey};
+use super::{PAGE, TileKey};
 use crate::RenderError;
 use crate::instances::SpeciesBounds;
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
 use std::sync::Arc;
 use sylvan_gpu::Gpu;
-use sylvan_scene::{CandidateRun, Density, PlacementMethod, SeededForest, Terrain};
+use sylvan_scene::{CandidateRun, Density, SeededForest, Terrain};
 use wgpu::util::DeviceExt;
 
 /// Most species layouts the shader's uniform holds.
@@ -110,8 +110,7 @@ impl GpuSeeds {
     ) -> Option<Self> {
         let set = forest.wang()?;
         let layouts = forest.layouts();
-        if forest.method() != PlacementMethod::Wang
-            || layouts.is_empty()
+        if layouts.is_empty()
             || layouts.len() > MAX_LAYOUTS
             || layouts.iter().any(|l| l.species as usize >= bounds.len())
         {
@@ -500,16 +499,12 @@ impl Pending {
     }
 }
 
-/// Pool bytes of `n` trees in whole pages.
-pub(crate) fn page_bytes(n: u32) -> u64 {
-    n.div_ceil(PAGE) as u64 * PAGE as u64 * TREE_BYTES
-}
-
 #[cfg(test)]
 mod tests {
     use super::super::produce::Source;
     use super::super::{PoolTree, TREE_BYTES};
     use super::*;
+    use sylvan_scene::PlacementMethod;
     use sylvan_scene::{DensityMap, SpeciesLayout, TreeInstance};
 
     fn gpu() -> Gpu {
