@@ -27,6 +27,7 @@ mod error;
 pub mod fidelity;
 mod flip;
 mod io;
+mod mean;
 mod psnr;
 mod ssim;
 
@@ -35,6 +36,7 @@ pub use fidelity::{FidelityRow, markdown_table};
 pub use flip::{Flip, PIXELS_PER_DEGREE, flip};
 pub use image::RgbImage;
 pub use io::{MAX_IMAGE_FILE_BYTES, MAX_IMAGE_PIXELS, load_rgb, save_png};
+pub use mean::mean_linear;
 pub use psnr::psnr;
 pub use ssim::ssim;
 

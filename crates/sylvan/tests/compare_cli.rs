@@ -56,8 +56,8 @@ fn json(args: &[&str]) -> serde_json::Value {
     assert_eq!(stdout.lines().count(), 1, "one JSON line: {stdout}");
     let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
     let keys: Vec<&str> = v.as_object().unwrap().keys().map(String::as_str).collect();
-    assert_eq!(keys.len(), 3, "{stdout}");
-    for key in ["flip_mean", "ssim", "psnr"] {
+    assert_eq!(keys.len(), 5, "{stdout}");
+    for key in ["flip_mean", "ssim", "psnr", "mean_a", "mean_b"] {
         assert!(keys.contains(&key), "missing {key}: {stdout}");
     }
     v
@@ -81,6 +81,7 @@ fn identical_images_json() {
     let v = json(&["compare", s(&a), s(&a), "--json"]);
     assert_eq!(v["flip_mean"], 0.0);
     assert_eq!(v["ssim"], 1.0);
+    assert_eq!(v["mean_a"], v["mean_b"]);
     // Infinite PSNR: JSON has no infinity, so it is null (documented in --help).
     assert!(v["psnr"].is_null());
 }
@@ -121,6 +122,15 @@ fn human_readable_line_and_heatmap() {
     let stdout = String::from_utf8(out.stdout).unwrap();
     assert_eq!(stdout.lines().count(), 1, "{stdout}");
     assert!(stdout.contains("FLIP") && stdout.contains("SSIM") && stdout.contains("PSNR"));
+    // Halving sRGB values takes a linear channel to between 0.21 and 0.5 of itself.
+    let bias = stdout.split("mean B/A ").nth(1).unwrap();
+    for v in bias
+        .trim_end_matches(|c: char| c == '%' || c.is_whitespace())
+        .split(' ')
+    {
+        let v: f64 = v.parse().unwrap_or_else(|_| panic!("{stdout}"));
+        assert!((-79.0..=-50.0).contains(&v), "{stdout}");
+    }
 
     let bytes = std::fs::read(&heat).unwrap();
     assert!(bytes.starts_with(b"\x89PNG\r\n\x1a\n"), "heat-map is a PNG");

@@ -40,6 +40,10 @@ pub struct ViewArgs {
     /// Shadow-map resolution per cascade.
     #[arg(long, default_value_t = 2048)]
     pub shadow_res: u32,
+    /// How far from the eye shadows are cast, metres (the four cascades split this range; a
+    /// reference of far trees needs it to reach them).
+    #[arg(long, value_name = "M", default_value_t = 1500.0, value_parser = parse_shadow_distance)]
+    pub shadow_distance: f32,
     /// Feed a GPU-driven technique from CPU-culled lists of every tree placed up front (the
     /// frame before the tiled world; for comparisons).
     #[arg(long)]
@@ -243,6 +247,7 @@ impl ViewArgs {
             technique,
             shadows: !self.no_shadows,
             shadow_resolution: self.shadow_res,
+            shadow_distance: self.shadow_distance,
             settings: self.bake.settings()?,
             cache: self.bake.cache(),
             cpu_driven: self.cpu_driven,
@@ -375,9 +380,31 @@ fn parse_seeds(s: &str) -> Result<sylvan_render::Seeds, String> {
     }
 }
 
+/// Longest `--shadow-distance`: the cascades' depth range and texel snapping stay in f32's
+/// comfortable range well beyond it.
+const MAX_SHADOW_DISTANCE_M: f32 = 100_000.0;
+
+fn parse_shadow_distance(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(d) if d.is_finite() && (10.0..=MAX_SHADOW_DISTANCE_M).contains(&d) => Ok(d),
+        _ => Err(format!(
+            "'{s}': write a distance in metres from 10 to {MAX_SHADOW_DISTANCE_M}"
+        )),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn shadow_distances_are_checked() {
+        assert_eq!(parse_shadow_distance("5000"), Ok(5000.0));
+        for bad in ["0", "-3", "nan", "inf", "1e9", "far"] {
+            let e = parse_shadow_distance(bad).unwrap_err();
+            assert!(e.contains("metres from 10"), "{bad}: {e}");
+        }
+    }
 
     #[test]
     fn path_times_span_the_path() {

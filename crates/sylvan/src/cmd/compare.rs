@@ -1,5 +1,6 @@
 //! `sylvan compare`: ꟻLIP, SSIM and PSNR of two PNGs, as one line for people or one JSON object
-//! for tools (`--json`), optionally writing the ꟻLIP heat-map. The metrics are `sylvan-eval`'s.
+//! for tools (`--json`), optionally writing the ꟻLIP heat-map, with both images' mean linear
+//! colours (a bias shows there apart from texture). The metrics are `sylvan-eval`'s.
 
 use std::path::PathBuf;
 use sylvan_eval::{EvalError, Metrics};
@@ -8,14 +9,16 @@ use sylvan_eval::{EvalError, Metrics};
 #[derive(clap::Args)]
 #[command(after_help = "\
 Metrics: FLIP (LDR, 67 pixels per degree; 0 = identical, lower is better), SSIM (Rec.709 luma, \
-11x11 Gaussian window; 1 = identical), PSNR (RGB, 8-bit, dB).
+11x11 Gaussian window; 1 = identical), PSNR (RGB, 8-bit, dB), and each image's mean colour in \
+linear light (sRGB decoded).
 With --json, identical images have infinite PSNR, which JSON cannot write: \"psnr\" is null then.")]
 pub struct CompareArgs {
     /// Reference image (PNG, 8- or 16-bit; alpha is ignored).
     a: PathBuf,
     /// Test image (PNG, the same size as A).
     b: PathBuf,
-    /// Print one JSON object {"flip_mean", "ssim", "psnr"} on stdout ("psnr": null when identical).
+    /// Print one JSON object {"flip_mean", "ssim", "psnr", "mean_a", "mean_b"} on stdout ("psnr":
+    /// null when identical; the means are linear [R, G, B]).
     #[arg(long)]
     json: bool,
     /// Also write the FLIP error heat-map (magma colours, black = no error) to this PNG.
@@ -78,25 +81,50 @@ pub fn run(args: CompareArgs) -> anyhow::Result<()> {
     if let Some(path) = &args.heatmap {
         sylvan_eval::save_png(path, &flip.heatmap)?;
     }
+    let means = [sylvan_eval::mean_linear(&a)?, sylvan_eval::mean_linear(&b)?];
     if args.json {
+        #[derive(serde::Serialize)]
+        struct Report {
+            #[serde(flatten)]
+            metrics: Metrics,
+            mean_a: [f64; 3],
+            mean_b: [f64; 3],
+        }
+        let [mean_a, mean_b] = means;
+        let report = Report {
+            metrics,
+            mean_a,
+            mean_b,
+        };
         // serde_json writes an infinite PSNR as `null`.
-        println!("{}", serde_json::to_string(&metrics)?);
+        println!("{}", serde_json::to_string(&report)?);
     } else {
-        println!("{}", human_line(&metrics, flip.p95, flip.max));
+        println!("{}", human_line(&metrics, flip.p95, flip.max, means));
     }
     Ok(())
 }
 
-/// `FLIP 0.1333 (p95 0.4120, max 0.9830)  SSIM 0.9123  PSNR 31.20 dB`.
-fn human_line(m: &Metrics, p95: f32, max: f32) -> String {
+/// `FLIP 0.1333 (p95 0.4120, max 0.9830)  SSIM 0.9123  PSNR 31.20 dB  mean B/A −1.2 +0.4 +3.0 %`.
+fn human_line(m: &Metrics, p95: f32, max: f32, [a, b]: [[f64; 3]; 2]) -> String {
     let psnr = if m.psnr.is_infinite() {
         "inf (identical)".to_owned()
     } else {
         format!("{:.2} dB", m.psnr)
     };
+    let bias = |i: usize| {
+        if a[i] > 0.0 {
+            format!("{:+.1}", 100.0 * (b[i] / a[i] - 1.0))
+        } else {
+            "n/a".to_owned()
+        }
+    };
     format!(
-        "FLIP {:.4} (p95 {p95:.4}, max {max:.4})  SSIM {:.4}  PSNR {psnr}",
-        m.flip_mean, m.ssim
+        "FLIP {:.4} (p95 {p95:.4}, max {max:.4})  SSIM {:.4}  PSNR {psnr}  mean B/A {} {} {} %",
+        m.flip_mean,
+        m.ssim,
+        bias(0),
+        bias(1),
+        bias(2)
     )
 }
 
