@@ -5,11 +5,12 @@
 # down, drifting 2 m per frame forward; FRAMES frames at SIZE along it (`render --path`), then
 # the ꟻLIP of every pair of consecutive frames (`sylvan compare`). Prints the median, the
 # largest, largest/median, and the frames where the screen centre's ground distance crosses
-# s_max (1.5 km) with their ꟻLIP. Pass (BN12 §7, the issue's bar): largest ≤ 1.5 × median and
-# no spike at the boundary. CONTROL=1 also runs the negative control (a hard switch at s_max:
-# `--set shadermap.handover=false`), which must show the pops the metric is there to see.
+# s_max (1.5 km) with their ꟻLIP, and each pair against the median of its ±5 neighbours (a
+# pop is a spike there). The issue's bar: largest ≤ 1.5 × median and no spike at the
+# boundary. CONTROL=1 also runs the negative control (a hard switch at s_max: `--set
+# shadermap.handover=false`), which must show the pops the metric is there to see.
 # Usage: scripts/measure-flyover.sh [OUT_DIR]   (default out/measure-flyover)
-# FRAMES=300 SIZE=320x180 (the plan's; lavapipe takes 5–30 s per frame near the ground).
+# FRAMES=300 SIZE=320x180 (the plan's; lavapipe takes about 2.7 s per frame, 14 min per run).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT=${1:-out/measure-flyover}
@@ -67,6 +68,18 @@ bmax = max((f[j - 1] for j in near), default=float('nan'))
 print('%s: %d frames; consecutive FLIP median %.4f, largest %.4f (frames %d→%d), largest/median %.2f; '
       'at the s_max crossings (frames %s ± 2) largest %.4f = %.2f × median'
       % (name, frames, med, mx, worst - 1, worst, mx / med, cross, bmax, bmax / med))
+# A pop is a frame pair far above its neighbours: each pair against the median of the K pairs
+# either side of it (the pair itself left out), so the slow change of content with altitude
+# (crowns resolved near the ground, a smooth field from 3 km) does not count.
+K = 5
+def spike(i):
+    around = [f[j] for j in range(max(0, i - K), min(len(f), i + K + 1)) if j != i]
+    return f[i] / max(statistics.median(around), 1e-9)
+sp = [spike(i) for i in range(len(f))]
+sworst = max(range(len(sp)), key=lambda i: sp[i])
+smax_b = max((sp[j - 1] for j in near), default=float('nan'))
+print('%s: largest pair against its ±%d neighbours %.2f (frames %d→%d); at the crossings %.2f'
+      % (name, K, sp[sworst], sworst, sworst + 1, smax_b))
 EOF
 }
 
