@@ -10,7 +10,8 @@
 # (linear R, G, B of the PNGs). `geometry` at 1 spp is what the far bands' aliasing alone gives.
 # Usage: scripts/measure-far-fidelity.sh [OUT_DIR]   (default out/measure-far-fidelity)
 # SIZE=160x160 DENSITY=100 TECHNIQUES="auto zfield geometry" (geometry = 1 spp); REUSE=1 keeps
-# the PNGs already in OUT_DIR and only compares.
+# the PNGs already in OUT_DIR and only compares; EXTRA="--sun 180,-5 --no-shadows" adds render
+# flags to every render, the reference's included (that one is the sky-only control).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT=${1:-out/measure-far-fidelity}
@@ -65,7 +66,7 @@ print("FLIP %.4f, mean colour against the reference %s %%" % (m["flip_mean"], bi
 echo "== reference: geometry, 16 spp, shadows to 5.6 km" | tee "$OUT/result.txt"
 if [[ ${REUSE:-0} != 1 || ! -f $OUT/ref.png ]]; then
   /usr/bin/time -f "%e s" $S render "$SCENE" --technique geometry --spp 16 --size "$SIZE" \
-    --shadow-distance 5600 --out "$OUT/ref.png" --stats "$OUT/ref.json" 2>&1 | tail -2 | tee -a "$OUT/result.txt"
+    --shadow-distance 5600 ${EXTRA:-} --out "$OUT/ref.png" --stats "$OUT/ref.json" 2>&1 | tail -2 | tee -a "$OUT/result.txt"
 fi
 for t in $TECHNIQUES; do
   echo "== $t" | tee -a "$OUT/result.txt"
@@ -74,7 +75,7 @@ for t in $TECHNIQUES; do
     # trees to s_max and its field holds the shadows beyond (the default 1.5 km).
     reach=()
     [[ $t == auto ]] || reach=(--shadow-distance 5600)
-    $S render "$SCENE" --technique "$t" --size "$SIZE" "${reach[@]}" --out "$OUT/$t.png" \
+    $S render "$SCENE" --technique "$t" --size "$SIZE" "${reach[@]}" ${EXTRA:-} --out "$OUT/$t.png" \
       --stats "$OUT/$t.json" 2>&1 | tail -1 | tee -a "$OUT/result.txt"
   fi
   for b in "${BANDS[@]}"; do

@@ -373,6 +373,10 @@ fn the_table_key_follows_what_was_measured() {
             sky_scale: 2.0,
             ..d()
         },
+        ZFieldDrawParams {
+            sky_normal_weight: 0.0,
+            ..d()
+        },
     ] {
         assert_eq!(with(same), key);
     }

@@ -579,6 +579,59 @@ fn sky_light_leaves_a_trees_base_darker_than_its_top() {
     );
 }
 
+/// Eq. 9's sky follows the baked normal (`sky_normal_weight`): seen from the side, a crown's
+/// leaves face the eye and see half ground, as `geometry` lights them; BN12's upward sky
+/// (weight 0) is too bright there (BENCHMARKS "M8": +16 to +86 % with distance).
+#[test]
+fn sky_light_follows_the_baked_normal_as_the_reference_does() {
+    let sun = common::sun(180.0, -5.0);
+    let eye = Vec3::new(0.0, 6.0, -28.0);
+    let scene = one_tree_scene(eye, sun, &[(AT, 0.0)], flat());
+    let bg = render(&one_tree_scene(eye, sun, &[], flat()), "geometry", 1, &[]);
+    let reference = render(&scene, "geometry", 4, &[]);
+    save("sky-normal-reference", &reference);
+    let [upward, normal] = ["0", "1"].map(|w| {
+        let z = render(
+            &scene,
+            "zfield",
+            4,
+            &["zfield.order=9", &format!("zfield.sky_normal_weight={w}")],
+        );
+        save(&format!("sky-normal-{w}"), &z);
+        z
+    });
+    // The crown where all three cover it: the lighting, not the coverage, is compared.
+    let crown: Vec<bool> = [&reference, &upward, &normal]
+        .map(|img| mask(img, &bg))
+        .iter()
+        .fold(vec![true; (SIZE * SIZE) as usize], |acc, m| {
+            acc.iter().zip(m).map(|(a, b)| *a && *b).collect()
+        });
+    let mean = |img: &image::RgbImage| {
+        let (sum, n) = img
+            .pixels()
+            .zip(&crown)
+            .filter(|(_, m)| **m)
+            .fold((0.0f64, 0usize), |(s, n), (p, _)| {
+                (s + (p[0] as f64 + p[1] as f64 + p[2] as f64) / 3.0, n + 1)
+            });
+        assert!(n > 200, "the crown covers {n} pixels");
+        sum / n as f64
+    };
+    let (geometry, upward, normal) = (mean(&reference), mean(&upward), mean(&normal));
+    eprintln!(
+        "sky-lit crown from the side: geometry {geometry:.1}, zfield upward sky {upward:.1}, baked normal's {normal:.1}"
+    );
+    assert!(
+        normal < upward,
+        "the side sees less sky: {normal} vs {upward}"
+    );
+    assert!(
+        (normal - geometry).abs() < (upward - geometry).abs(),
+        "the baked normal's sky is nearer the reference's: {normal} vs {upward}, geometry {geometry}"
+    );
+}
+
 /// As a band of the `auto` chain: a tree mid-way through the cross-fade from the plant's meshes
 /// to its z-field is drawn by both bands (each with part of its presence) and covers what either
 /// covers alone — no hole (a band dropping the tree, or presence applied twice, fails).

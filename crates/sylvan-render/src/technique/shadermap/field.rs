@@ -19,6 +19,7 @@ struct GpuFieldParams {
     tree_albedo: [f32; 4],
     light: [f32; 4],
     handover: [f32; 4],
+    sky: [f32; 4],
 }
 
 /// Where and how the field takes over from the trees (BN12 §7).
@@ -124,6 +125,7 @@ impl ForestField {
                 if handover.fade { 1.0 } else { 0.0 },
                 0.0,
             ],
+            sky: [draw.sky_normal_weight, 0.0, 0.0, 0.0],
         };
         let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("shadermap_field_params"),

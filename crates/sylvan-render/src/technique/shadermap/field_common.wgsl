@@ -18,6 +18,8 @@ struct FieldParams {
     // trees); y: ν forced (< 0: BN12's smoothstep(0, 0.8, s/s_max)); z: the §7 handover
     // (1) or a hard switch at s_max (0).
     handover: vec4<f32>,
+    // x: `zfield.sky_normal_weight` (the trees' sky blended towards what their normals see).
+    sky: vec4<f32>,
 };
 
 @group(FIELD) @binding(0) var<uniform> field: FieldParams;
@@ -80,12 +82,14 @@ fn field_hotspot(v: vec3<f32>, l: vec3<f32>) -> f32 {
 
 // The tables at ground point `xz` of normal `n` seen along `v` (towards the eye), sun `l`: `seen` = Gd
 // (k_g + k_ḡ, eq. 15), `seen_lit` = 𝔾 (k_g, eq. 14), `trees_lit` = 𝕋 (k_t / (k_t + k_t̄),
-// eq. 16), `trees_sky` = 𝔼 (eq. 21), `ground_sky` = 𝔻 (eq. 19).
+// eq. 16), `trees_sky` = 𝔼 (eq. 21), `trees_sky_side` = 𝔼ₙ (𝔼's share a leaf facing the eye
+// sees below its horizon), `ground_sky` = 𝔻 (eq. 19).
 struct ForestTerms {
     seen: f32,
     seen_lit: f32,
     trees_lit: f32,
     trees_sky: f32,
+    trees_sky_side: f32,
     ground_sky: f32,
 };
 
@@ -96,13 +100,14 @@ fn forest_terms(xz: vec2<f32>, v: vec3<f32>, l: vec3<f32>, n: vec3<f32>) -> Fore
     let lambda = field_density(raster, a.theta_v) * a.slope;
     let lambda_sky = field_density(raster, 0.7853982) * a.slope;
     let gt = table_gt(a.theta_v, a.theta_l, a.phi, lambda);
-    let dec = vec2<f32>(table_dec(a.theta_v, lambda).x, table_dec(a.theta_v, lambda_sky).y);
+    let dec = table_dec(a.theta_v, lambda);
     var out: ForestTerms;
     out.seen = clamp(table_g_diag(a.theta_v, lambda), 0.0, 1.0);
     out.seen_lit = clamp(gt.x, 0.0, out.seen);
     out.trees_lit = gt.y;
     out.trees_sky = dec.x;
-    out.ground_sky = dec.y;
+    out.trees_sky_side = dec.z;
+    out.ground_sky = table_dec(a.theta_v, lambda_sky).y;
     return out;
 }
 
@@ -110,7 +115,11 @@ fn forest_terms(xz: vec2<f32>, v: vec3<f32>, l: vec3<f32>, n: vec3<f32>) -> Fore
 // visibility `vis`.
 fn forest_trees(t: ForestTerms, rho: vec3<f32>, v: vec3<f32>, l: vec3<f32>, vis: f32) -> vec3<f32> {
     let it = rho * field.light.x * field_hotspot(v, l) * frame.sun_color.rgb * t.trees_lit * vis;
-    let jt = rho * field.light.y * sky_light(vec3<f32>(0.0, 1.0, 0.0)) * t.trees_sky;
+    // Eq. 21 with `zfield`'s sky (`sky_shape`): mix(S, sky_light(n), w) averaged over the tree
+    // points is S 𝔼 − w (S − G) 𝔼ₙ, S the sky an upward normal sees, G the ground's.
+    let up = sky_light(vec3<f32>(0.0, 1.0, 0.0));
+    let sky = up * t.trees_sky - field.sky.x * (up - frame.sky_ground.rgb) * t.trees_sky_side;
+    let jt = rho * field.light.y * max(sky, vec3<f32>(0.0));
     return it + jt;
 }
 

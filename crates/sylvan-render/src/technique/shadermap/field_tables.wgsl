@@ -1,6 +1,6 @@
 // `shadermap`'s tables as the far field samples them (`gpu.rs`): (𝔾, 𝕋) on ridge-aligned axes
 // (θ̄ = (θv + θl)/2, δ = θv − θl on nodes crowding δ = 0, φ, λ) in a 3D texture, one slab of
-// θ̄ per density node; (𝔼, 𝔻) per (θv, λ) in a 2D texture. Angles are BN12's transformed
+// θ̄ per density node; (𝔼, 𝔻, 𝔼ₙ) per (θv, λ) in a 2D texture. Angles are BN12's transformed
 // zeniths (radians); λ in trees per m². `RidgeTables::sample` is the CPU twin of `table_gt`.
 // Composed with `@group(FIELD)` and `@binding(T0..T3)` substituted.
 
@@ -70,12 +70,12 @@ fn table_g_diag(theta: f32, lambda: f32) -> f32 {
     return table_gt(theta, theta, 0.0, lambda).x;
 }
 
-// (𝔼, 𝔻) at transformed view zenith `tv` and density `lambda`.
-fn table_dec(tv: f32, lambda: f32) -> vec2<f32> {
+// (𝔼, 𝔻, 𝔼ₙ) at transformed view zenith `tv` and density `lambda`.
+fn table_dec(tv: f32, lambda: f32) -> vec3<f32> {
     let nt = table_info.dims.x;
     let nl = table_info.dims.w;
     let lc = table_lambda_coord(lambda);
     let x = (clamp(tv / TABLE_HALF_PI, 0.0, 1.0) * (nt - 1.0) + 0.5) / nt;
     let y = (lc.x + lc.y + 0.5) / nl;
-    return textureSampleLevel(table_dec_tex, table_sampler, vec2<f32>(x, y), 0.0).xy;
+    return textureSampleLevel(table_dec_tex, table_sampler, vec2<f32>(x, y), 0.0).xyz;
 }

@@ -1,6 +1,6 @@
 //! The tables on the GPU (`field_tables.wgsl`): (𝔾, 𝕋) on the ridge-aligned axes
 //! ([`RidgeTables`]) as an `Rg16Float` 3D texture (x: φ, y: δ node, z: λ node × θ̄ node), and
-//! (𝔼, 𝔻) per (θv node, λ node) as an `Rgba16Float` 2D texture; a uniform with the sizes and
+//! (𝔼, 𝔻, 𝔼ₙ) per (θv node, λ node) as an `Rgba16Float` 2D texture; a uniform with the sizes and
 //! the density nodes. Hardware trilinear filtering in each λ slab (z clamped to the slab's
 //! texel centres), the two slabs mixed in the shader: two fetches per lookup.
 
@@ -30,7 +30,7 @@ struct GpuTableInfo {
 pub struct GpuTables {
     /// (𝔾, 𝕋), `Rg16Float` 3D.
     pub gt: wgpu::TextureView,
-    /// (𝔼, 𝔻, 0, 0), `Rgba16Float` 2D, x: θv node, y: λ node.
+    /// (𝔼, 𝔻, 𝔼ₙ, 0), `Rgba16Float` 2D, x: θv node, y: λ node.
     pub dec: wgpu::TextureView,
     /// `TableInfo` of `field_tables.wgsl`.
     pub info: wgpu::Buffer,
@@ -114,7 +114,12 @@ impl GpuTables {
         let mut dec_bits = Vec::with_capacity(nt * nl * 4);
         for l in 0..nl {
             for v in 0..nt {
-                dec_bits.extend([f32_to_f16(t.e_node(l, v)), f32_to_f16(t.d[l]), 0, 0]);
+                dec_bits.extend([
+                    f32_to_f16(t.e_node(l, v)),
+                    f32_to_f16(t.d[l]),
+                    f32_to_f16(t.e_side_node(l, v)),
+                    0,
+                ]);
             }
         }
         let dec = crate::texture::upload_raw(

@@ -11,7 +11,8 @@
 //! highest tree point along each texel's ray (`measure.wgsl`): G-buffers for the view
 //! directions (those of φ = 0), light maps for all. `measure_eval` then sums, per (view,
 //! light) pair, the ground texels seen and lit (𝔾; the diagonal and the view's ground seen give
-//! Gd) and the sunlight reaching each tree sample (𝕋), and per view the sky reaching it (𝔼);
+//! Gd) and the sunlight reaching each tree sample (𝕋), and per view the sky reaching it (𝔼)
+//! and the part of it below the horizon of the tree point's baked normal (𝔼ₙ);
 //! the sums are read back once per density node. 𝔻 is the quadrature of the diagonal.
 
 use super::ShaderMapBakeParams;
@@ -35,7 +36,7 @@ use wgpu::util::DeviceExt;
 /// Name of the tables in the cache (`<species>-shadermap-<hash>.sylbake`).
 pub const NAME: &str = "shadermap";
 /// Version of the tables' payload and of the measurement; bump when either changes.
-pub const FORMAT_VERSION: u32 = 3;
+pub const FORMAT_VERSION: u32 = 4;
 /// Most trees in one patch (before the copies that cover the wrap-around).
 pub const MAX_PATCH_TREES: usize = 20_000;
 /// Directions steeper than this are measured at it (the sheared projection degenerates at
@@ -412,6 +413,8 @@ struct PairSums {
 struct ViewSums {
     /// Σ δ·hole over the tree samples.
     sky: f64,
+    /// Σ δ·hole·(1 − n_y)/2 (n: the baked normal, facing the view).
+    sky_side: f64,
     /// Tree samples.
     trees: u32,
     /// Ground texels seen.
@@ -846,7 +849,9 @@ impl Measurer {
     ) -> Result<(Vec<PairSums>, Vec<ViewSums>), RenderError> {
         let device = &gpu.device;
         let (nv, nl) = (views.len(), lights.len());
-        let entries = nv * nl + nv;
+        // Per (view, light) pair one entry; per view two (𝔼's sums, then 𝔼ₙ's in its first
+        // word).
+        let entries = nv * nl + 2 * nv;
         let acc = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("shadermap_measure_acc"),
             contents: &vec![0u8; entries * 12],
@@ -875,7 +880,7 @@ impl Measurer {
                     view: v.extend(p.side).to_array(),
                     sizes: [self.px as f32, drawn.n as f32, lambda, self.stride() as f32],
                     tiles: [x, y, self.lights.cols, (k * nl + first) as u32],
-                    sky: [(nv * nl + k) as u32, (b == 0) as u32, first as u32, 0],
+                    sky: [(nv * nl + 2 * k) as u32, (b == 0) as u32, first as u32, 0],
                 };
                 let at = (b * nv + k) * stride as usize;
                 bytes[at..at + size as usize].copy_from_slice(bytemuck::bytes_of(&e));
@@ -956,9 +961,10 @@ impl Measurer {
             .collect();
         let views = (0..nv)
             .map(|k| {
-                let e = nv * nl + k;
+                let e = nv * nl + 2 * k;
                 ViewSums {
                     sky: words[3 * e] as f64 / SKY_ONE,
+                    sky_side: words[3 * e + 3] as f64 / SKY_ONE,
                     trees: words[3 * e + 1],
                     ground: words[3 * e + 2],
                 }
@@ -1027,6 +1033,7 @@ pub fn measure_tables(
         d: vec![0.0; nl as usize],
         t: vec![0.0; full],
         e: vec![0.0; (nl * nt) as usize],
+        e_side: vec![0.0; (nl * nt) as usize],
     };
     // Directions: the zenith, then (θ node k, φ node m) for 0 < k < θ; the view directions are
     // those of φ = 0. 𝔾 at 90° is analytic (no ground is seen through an endless forest);
@@ -1067,7 +1074,9 @@ pub fn measure_tables(
             t.gd[l * ntu + vi] = gd;
             if n > 0 {
                 let w = views[vi];
-                t.e[l * ntu + vi] = (w.sky / w.trees.max(1) as f64).clamp(0.0, 1.0) as f32;
+                let trees = w.trees.max(1) as f64;
+                t.e[l * ntu + vi] = (w.sky / trees).clamp(0.0, 1.0) as f32;
+                t.e_side[l * ntu + vi] = (w.sky_side / trees).clamp(0.0, 1.0) as f32;
             }
             for s in 0..nt {
                 for m in 0..np {
@@ -1090,12 +1099,14 @@ pub fn measure_tables(
         }
         t.d[l] = t.integrate_d(l, 64).clamp(0.0, 1.0);
     }
-    // No tree at node 0: its 𝕋 and 𝔼 are node 1's (they are never weighted there).
+    // No tree at node 0: its 𝕋, 𝔼 and 𝔼ₙ are node 1's (they are never weighted there).
     let (row, erow) = (ntu * ntu * npu, ntu);
     let (first, rest) = t.t.split_at_mut(row);
     first.copy_from_slice(&rest[..row]);
-    let (first, rest) = t.e.split_at_mut(erow);
-    first.copy_from_slice(&rest[..erow]);
+    for e in [&mut t.e, &mut t.e_side] {
+        let (first, rest) = e.split_at_mut(erow);
+        first.copy_from_slice(&rest[..erow]);
+    }
     progress(nl as usize, nl as usize);
     Ok(t)
 }

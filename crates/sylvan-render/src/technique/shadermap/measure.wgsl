@@ -119,8 +119,8 @@ struct Eval {
     // xy: the view G-buffer's tile origin; z: light-map atlas tiles per row; w: the entry of
     // this dispatch's first light.
     tiles: vec4<u32>,
-    // x: the view's sky entry; y: 1 if this dispatch sums the sky (its first light is the
-    // first of all); z: the index in `lights` of this dispatch's first light.
+    // x: the view's first sky entry (of two); y: 1 if this dispatch sums the sky (its first
+    // light is the first of all); z: the index in `lights` of this dispatch's first light.
     sky: vec4<u32>,
 };
 
@@ -133,13 +133,15 @@ struct Eval {
 // stay within the downlevel four).
 @group(2) @binding(4) var<uniform> lights: array<vec4<f32>, 1024>;
 // Per (view, light) entry: Σ S′ (2¹² per unit), tree samples, ground texels seen and lit; per
-// view's sky entry: Σ δ·hole (2¹⁴ per unit), tree samples, ground texels seen.
+// view's sky entries (two): Σ δ·hole (2¹⁴ per unit), tree samples, ground texels seen, then
+// Σ δ·hole·(1 − n_y)/2 (the same unit; 𝔼ₙ).
 @group(2) @binding(5) var<storage, read_write> acc: array<atomic<u32>>;
 
 var<workgroup> wg_sun: atomic<u32>;
 var<workgroup> wg_trees: atomic<u32>;
 var<workgroup> wg_ground: atomic<u32>;
 var<workgroup> wg_sky: atomic<u32>;
+var<workgroup> wg_sky_side: atomic<u32>;
 var<workgroup> wg_seen: atomic<u32>;
 
 const SUN_ONE: f32 = 4096.0;
@@ -152,6 +154,7 @@ fn measure_eval(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
         atomicStore(&wg_trees, 0u);
         atomicStore(&wg_ground, 0u);
         atomicStore(&wg_sky, 0u);
+        atomicStore(&wg_sky_side, 0u);
         atomicStore(&wg_seen, 0u);
     }
     workgroupBarrier();
@@ -196,8 +199,8 @@ fn measure_eval(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
             let lod = max(log2(side / f32(px) / texel_m), 0.0);
             let zl = z_light(sp, pick.views, pick.weights, pv, lm, lod);
             let path_m = max(dot(zl.pl - pv, lm), 0.0) * base_scale.w;
-            let n = unpack4x8snorm(g.w).xyz;
-            let phase = phase_shape(normalize(n + vec3<f32>(0.0, 1e-6, 0.0)), l);
+            let n = normalize(unpack4x8snorm(g.w).xyz + vec3<f32>(0.0, 1e-6, 0.0));
+            let phase = phase_shape(n, l);
             // V(p_l): the light map's highest point along the light ray through p_l is this
             // tree (any copy of it) or lies below p_l.
             let wl = instance_to_world(zl.pl, base_scale, rot);
@@ -215,6 +218,7 @@ fn measure_eval(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
                 let hole = sky_hole(max(top - world.y, 0.0), ev.sizes.z);
                 let delta = unpack2x16unorm(g.z).x;
                 atomicAdd(&wg_sky, u32(delta * hole * SKY_ONE + 0.5));
+                atomicAdd(&wg_sky_side, u32(delta * hole * 0.5 * (1.0 - n.y) * SKY_ONE + 0.5));
             }
         }
     }
@@ -229,6 +233,7 @@ fn measure_eval(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
             atomicAdd(&acc[e], atomicLoad(&wg_sky));
             atomicAdd(&acc[e + 1u], atomicLoad(&wg_trees));
             atomicAdd(&acc[e + 2u], atomicLoad(&wg_seen));
+            atomicAdd(&acc[e + 3u], atomicLoad(&wg_sky_side));
         }
     }
 }

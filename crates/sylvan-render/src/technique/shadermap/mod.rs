@@ -62,6 +62,10 @@
 //! - 𝕋 is relative to an unshadowed isotropic leaf and carries `zfield`'s normal-weighted
 //!   phase (`normal_weight`, default 0.5), so the far field can match the near trees; at
 //!   `normal_weight = 0`, `tau = 0` it is BN12's `k_t / (k_t + k_t̄)`.
+//! - 𝔼 comes with 𝔼ₙ, the part of it below the horizon of the tree points' baked normals
+//!   (the mean of `δ·hole·(1 − n_y)/2`), so the field's trees take `zfield`'s sky blended
+//!   towards the normal's (`sky_normal_weight`, default 1): `S 𝔼 − w (S − G) 𝔼ₙ` for sky `S`
+//!   and ground `G` — BN12's `S 𝔼` at `w = 0`. 𝔼ₙ is stored in 𝔼's texture's third channel.
 //! - 𝔾 at the 90° node is analytic (no ground is seen through an endless forest at grazing
 //!   angles); the directions rendered are capped at 87° real zenith (𝕋 and 𝔼 at 90° are
 //!   measured there).

@@ -12,5 +12,5 @@ fn probe(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let p = probe_in[id.x];
-    probe_out[id.x] = vec4<f32>(table_gt(p.x, p.y, p.z, p.w), table_dec(p.x, p.w));
+    probe_out[id.x] = vec4<f32>(table_gt(p.x, p.y, p.z, p.w), table_dec(p.x, p.w).xy);
 }

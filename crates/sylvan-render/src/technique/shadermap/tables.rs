@@ -45,6 +45,10 @@ pub struct ShaderMapTables {
     /// `e[l · theta + v]`: 𝔼(θv, λ), the sky reaching the tree points seen from the view: the
     /// mean of `zfield`'s `δ_v / (1 + d²λ/4)` (eq. 9 in eq. 21).
     pub e: Vec<f32>,
+    /// `e_side[l · theta + v]`: 𝔼ₙ(θv, λ), the part of 𝔼 below the horizon of the leaves'
+    /// normals: the mean of `δ_v / (1 + d²λ/4) · (1 − n_y)/2`, n the baked normal (facing the
+    /// eye). `zfield`'s sky `mix(S, sky_light(n), w)` averages to `S 𝔼 − w (S − G) 𝔼ₙ`.
+    pub e_side: Vec<f32>,
 }
 
 impl ShaderMapTables {
@@ -73,6 +77,11 @@ impl ShaderMapTables {
     /// 𝔼 at nodes (λ `l`, θv `v`).
     pub fn e_node(&self, l: usize, v: usize) -> f32 {
         self.e[l * self.theta as usize + v]
+    }
+
+    /// 𝔼ₙ at nodes (λ `l`, θv `v`).
+    pub fn e_side_node(&self, l: usize, v: usize) -> f32 {
+        self.e_side[l * self.theta as usize + v]
     }
 
     /// 𝔾's diagonal at nodes (λ `l`, θ `v`).
@@ -119,6 +128,7 @@ impl ShaderMapTables {
             || self.t.len() != full
             || self.gd.len() != nl * nt
             || self.e.len() != nl * nt
+            || self.e_side.len() != nl * nt
             || self.d.len() != nl
         {
             return Err(format!(
@@ -153,7 +163,10 @@ impl ShaderMapTables {
         }
         // 𝕋 carries the normal-weighted phase (up to 1/0.34 ≈ 2.9 at a sunlit normal); 𝔼 a
         // visibility.
-        if !self.t.iter().all(|v| (0.0..=4.0).contains(v)) || !self.e.iter().all(unit) {
+        if !self.t.iter().all(|v| (0.0..=4.0).contains(v))
+            || !self.e.iter().all(unit)
+            || !self.e_side.iter().all(unit)
+        {
             return Err("a tree lighting fraction out of range (𝕋 in [0, 4], 𝔼 in [0, 1])".into());
         }
         Ok(())
@@ -188,6 +201,7 @@ impl Codec for ShaderMapTables {
         e.f32s(&self.d);
         e.f32s(&self.t);
         e.f32s(&self.e);
+        e.f32s(&self.e_side);
         e.buf
     }
 
@@ -210,6 +224,7 @@ impl Codec for ShaderMapTables {
             d: d.f32s()?,
             t: d.f32s()?,
             e: d.f32s()?,
+            e_side: d.f32s()?,
         };
         d.finish()?;
         t.check().map_err(DecodeError)?;

@@ -31,6 +31,8 @@ struct ZParams {
     // density map); z: 1 when shadows store the crowns' opacity (else opaque where α > ½);
     // w: 1 when casters cover only what their views can show (`caster_extent`).
     extra: vec4<f32>,
+    // x: the sky's normal weight (eq. 9's sky blended towards what the baked normal sees).
+    more: vec4<f32>,
 };
 
 @group(1) @binding(0) var<storage, read> z_species: array<ZSpecies>;

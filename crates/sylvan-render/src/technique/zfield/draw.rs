@@ -46,6 +46,7 @@ struct GpuZParams {
     sun: [f32; 4],
     sky: [f32; 4],
     extra: [f32; 4],
+    more: [f32; 4],
 }
 
 /// The prepared z-field technique.
@@ -182,6 +183,7 @@ impl ZFieldBindings {
                 f32::from(u8::from(draw.shadow_opacity)),
                 f32::from(u8::from(draw.tight_casters)),
             ],
+            more: [draw.sky_normal_weight, 0.0, 0.0, 0.0],
         };
         let device = &gpu.device;
         let storage = |label, contents: &[u8]| common::storage_buffer(gpu, label, contents);

@@ -52,10 +52,14 @@
 //!   `normal_weight` (default 0.5) blends it towards the reference's leaf response at the
 //!   baked normal (Lambert + the geometry's diffuse transmission) — 0 is BN12's model
 //!   (measured 0.0648 with 0.5 vs 0.0678 with 0 on the default scene).
-//! - Sky: `L_sky` is the renderer's hemispherical sky seen by an upward normal; `Λ_h(x)` is the
-//!   density of the trees placed around (16 m either side), not of the density maps they came
-//!   from; where the cover holds no tile, and with `density_per_ha` set, one value per scene
-//!   and flat ground.
+//! - Sky: `L_sky` is the renderer's hemispherical sky seen by an upward normal, blended by
+//!   `sky_normal_weight` (default 1) towards the sky seen by the baked normal, as the reference
+//!   lights a leaf facing the eye (from the side it sees half ground). BN12's upward sky (0)
+//!   made far crowns too bright in sky light alone: against 16-spp geometry +16 % green at
+//!   0.65–1 km rising to +86 % at 3–5 km; with the normal −4 % to −1 % (BENCHMARKS "M8").
+//!   `Λ_h(x)` is the density of the trees placed around (16 m either side), not of the density
+//!   maps they came from; where the cover holds no tile, and with `density_per_ha` set, one
+//!   value per scene and flat ground.
 //! - Ground: `Δ` subtracts Γ's local mean Γ̄, not BN12's `Λ_h A`, so it averages to 1 whatever
 //!   the crowns' shapes; `δ_g` is eq. 9's hole at the depth of the mean tree for the local
 //!   density (BN12 takes it from the shader-map's 𝔻, which only a forest field has — with
@@ -216,6 +220,9 @@ pub struct ZFieldDrawParams {
     /// Blend of the isotropic phase towards the reference's leaf response at the baked normal
     /// (0: BN12's model; 1: the reference's Lambert + transmission).
     pub normal_weight: f32,
+    /// Blend of eq. 9's sky (what an upward normal sees) towards what the baked normal sees,
+    /// as the reference lights a leaf (0: BN12's model; 1, the default: the reference's).
+    pub sky_normal_weight: f32,
     /// Hotspot amplitude a1 of eq. 8.
     pub a1: f32,
     /// Hotspot sharpness a2 of eq. 8 (width 1/a2 radians).
@@ -250,6 +257,7 @@ impl Default for ZFieldDrawParams {
             opacity_scaled_tau: true,
             sun_scale: 0.4,
             normal_weight: 0.5,
+            sky_normal_weight: 1.0,
             a1: 0.2,
             a2: 20.0,
             sky_scale: 1.0,
@@ -284,6 +292,11 @@ impl ParamTable for ZFieldDrawParams {
             key: "normal_weight",
             unit: "0–1",
             doc: "blend of the isotropic phase towards the reference leaf response at the baked normal (0: BN12)",
+        },
+        ParamDoc {
+            key: "sky_normal_weight",
+            unit: "0–1",
+            doc: "blend of eq. 9's sky (seen by an upward normal) towards the sky the baked normal sees, as the reference lights a leaf (0: BN12)",
         },
         ParamDoc {
             key: "a1",
@@ -337,6 +350,7 @@ impl ParamTable for ZFieldDrawParams {
             ("tau", self.tau, 0.0, 100.0),
             ("sun_scale", self.sun_scale, 0.0, 100.0),
             ("normal_weight", self.normal_weight, 0.0, 1.0),
+            ("sky_normal_weight", self.sky_normal_weight, 0.0, 1.0),
             ("a1", self.a1, 0.0, 1.0),
             ("a2", self.a2, 0.0, 1000.0),
             ("sky_scale", self.sky_scale, 0.0, 100.0),

@@ -311,6 +311,13 @@ fn phase_shape(n: vec3<f32>, l: vec3<f32>) -> f32 {
     return mix(1.0, leaf / 0.34, zp.sky.z);
 }
 
+// Eq. 9's L_sky: the sky an upward normal sees, blended by `sky_normal_weight` towards what
+// the baked normal `n` sees (as `geometry` lights a leaf: seen from the side, a leaf facing
+// the eye sees half sky, half ground).
+fn sky_shape(n: vec3<f32>) -> vec3<f32> {
+    return mix(sky_light(vec3<f32>(0.0, 1.0, 0.0)), sky_light(n), zp.more.x);
+}
+
 // Eq. 9's cylindrical hole: the sky seen `d` metres below the crown's top through a forest
 // of `density` trees per m².
 fn sky_hole(d: f32, density: f32) -> f32 {
@@ -371,7 +378,7 @@ fn z_fragment(in: ZOut, masked: bool) -> ZFragment {
     let density = select(zp.sky.y, cover.z, known && zp.extra.y < 0.5);
     let slope = select(1.0, 0.5 * (1.0 + cover.w), known);
     let hole = sky_hole(d, density) * slope;
-    let sky = albedo * sky_light(vec3<f32>(0.0, 1.0, 0.0)) * zp.sky.x * delta_v * hole;
+    let sky = albedo * sky_shape(n) * zp.sky.x * delta_v * hole;
     // Eq. 22–23: towards the forest field's means as the tree recedes (none without one).
     let light_v = field_tree_light(sun, sky, albedo, world, v, l, vis);
     let lit = debug_tint(apply_fog(light_v, world), world, TECHNIQUE_ZFIELD);
