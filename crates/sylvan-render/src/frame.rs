@@ -147,9 +147,13 @@ pub struct Cascade {
 /// Fits `CASCADES` shadow cascades to `view` up to `shadow_distance`, looking along `-sun`.
 /// `caster_reach` is how far towards the sun casters may stand (terrain relief + tree height).
 /// Each cascade is a sphere fit snapped to its texel grid, so shadows do not shimmer.
+/// `shadow_near` > 0 starts the first cascade there instead of at the eye (nearer receivers
+/// are lit): all the maps' texels on one distance band, for a reference of far trees whose
+/// shadows converge (`render --shadow-near`).
 pub fn fit_cascades(
     view: &View,
     sun: Vec3,
+    shadow_near: f32,
     shadow_distance: f32,
     caster_reach: f32,
     resolution: u32,
@@ -157,8 +161,12 @@ pub fn fit_cascades(
     let far_all = shadow_distance.min(view.far);
     // Splits are computed from a few metres out, not from the near plane: a first cascade only
     // centimetres deep would make every nearby leaf cover the whole map many times over.
-    let split_near = SPLIT_NEAR_M.min(far_all * 0.5);
-    let mut near = view.near;
+    let split_near = SPLIT_NEAR_M.max(shadow_near).min(far_all * 0.5);
+    let mut near = if shadow_near > 0.0 {
+        split_near
+    } else {
+        view.near
+    };
     std::array::from_fn(|i| {
         // Practical split scheme (log/uniform blend, λ = 0.75).
         let k = (i + 1) as f32 / CASCADES as f32;
@@ -655,7 +663,7 @@ mod tests {
         for (azimuth, elevation) in [(0.0f32, 40.0f32), (140.0, 12.0), (200.0, 70.0), (90.0, 5.0)] {
             let (a, e) = (azimuth.to_radians(), elevation.to_radians());
             let sun = Vec3::new(a.sin() * e.cos(), e.sin(), a.cos() * e.cos());
-            let cascades = fit_cascades(&view, sun, 1500.0, 400.0, 2048);
+            let cascades = fit_cascades(&view, sun, 0.0, 1500.0, 400.0, 2048);
             let reach = shadow_reach(sun, 30.0, 8.0, 0.3, 400.0);
             let cull = CasterCull::new(&view, view_proj, &cascades, sun, reach, 12.0, 2048);
             let mut checked = 0;
@@ -695,7 +703,7 @@ mod tests {
     fn caster_cull_drops_casters_that_shade_nothing_seen() {
         let view = view();
         let sun = Vec3::new(0.3, 0.8, -0.5).normalize();
-        let cascades = fit_cascades(&view, sun, 1500.0, 400.0, 2048);
+        let cascades = fit_cascades(&view, sun, 0.0, 1500.0, 400.0, 2048);
         let cull = CasterCull::new(&view, view.view_proj(), &cascades, sun, 300.0, 12.0, 2048);
         let forward = (view.target - view.eye).normalize();
         // Far behind the eye.

@@ -43,6 +43,9 @@ pub struct RenderOptions {
     pub shadow_resolution: u32,
     /// Shadows are cast up to this distance from the eye (metres).
     pub shadow_distance: f32,
+    /// Where the first cascade starts (metres from the eye; 0: at the eye). Receivers nearer
+    /// are lit: a measurement setting that puts every shadow texel on one far band.
+    pub shadow_near: f32,
     /// Exposure multiplier before tone mapping.
     pub exposure: f32,
     /// Time with the wall clock even where GPU timestamps exist.
@@ -100,6 +103,7 @@ impl Default for RenderOptions {
             shadows: true,
             shadow_resolution: 2048,
             shadow_distance: 1500.0,
+            shadow_near: 0.0,
             exposure: 1.0,
             wall_timer: false,
             debug: DebugView::None,
@@ -751,6 +755,7 @@ impl Renderer {
         let cascades = frame::fit_cascades(
             view,
             sun_dir,
+            self.options.shadow_near,
             self.options.shadow_distance,
             self.caster_reach,
             self.frame.shadow_resolution,
