@@ -274,28 +274,92 @@ fn test() -> Result<(), String> {
         clippy,
         "cargo clippy --workspace --all-targets -- -D warnings",
     )?;
-    let cli = build_cli(false)?;
+    // One build serves every step: the test executables, and the CLI they drive (built with
+    // the same features, so the run below and the GL pass rebuild nothing).
+    let (binaries, cli) = build_tests()?;
     ensure_adapter(&cli, true)?;
     ensure_xvfb()?;
     let mut tests = cargo();
     tests.args(["test", "--workspace"]);
     run(tests, "cargo test --workspace")?;
     // The render tests again on the GL backend (the cross-backend tests, `*_as_vulkan_does`,
-    // already ran both).
-    let mut gl = cargo();
-    gl.env("WGPU_BACKEND", "gl").args([
-        "test",
-        "--package",
-        "sylvan-render",
-        "--",
-        "--skip",
-        "as_vulkan_does",
-    ]);
-    run(gl, "WGPU_BACKEND=gl cargo test --package sylvan-render")?;
+    // already ran both), from the executables just built: `cargo test --package sylvan-render`
+    // alone would resolve features for that package only and rebuild wgpu (5 min in CI).
+    let gl: Vec<&TestBinary> = binaries
+        .iter()
+        .filter(|b| b.package_dir.ends_with("crates/sylvan-render"))
+        .collect();
+    if gl.is_empty() {
+        return Err("cargo built no test executable for crates/sylvan-render".into());
+    }
+    for b in gl {
+        let mut c = Command::new(&b.exe);
+        c.current_dir(&b.package_dir)
+            .env("CARGO_MANIFEST_DIR", &b.package_dir)
+            .env("WGPU_BACKEND", "gl")
+            .args(["--skip", "as_vulkan_does"]);
+        quiet_driver_noise(&mut c);
+        let name = b.exe.file_name().unwrap_or_default().to_string_lossy();
+        run(c, &format!("WGPU_BACKEND=gl sylvan-render test {name}"))?;
+    }
     report_disk("after the workspace tests");
     bevy_plugin()?;
     report_disk("after the Bevy plugin's tests");
     Ok(())
+}
+
+/// A test executable of the workspace.
+struct TestBinary {
+    /// The directory of its package's `Cargo.toml` (where `cargo test` runs it).
+    package_dir: PathBuf,
+    exe: PathBuf,
+}
+
+/// `cargo test --workspace --no-run`: builds every test target and the `sylvan` CLI, and
+/// returns the test executables and the CLI's path, read from cargo's JSON messages.
+fn build_tests() -> Result<(Vec<TestBinary>, PathBuf), String> {
+    let what = "cargo test --workspace --no-run";
+    eprintln!("xtask: {what}");
+    let mut c = cargo();
+    c.args([
+        "test",
+        "--workspace",
+        "--no-run",
+        "--message-format=json-render-diagnostics",
+    ])
+    .stdout(std::process::Stdio::piped())
+    .stderr(std::process::Stdio::inherit());
+    let out = c.output().map_err(|e| format!("{what}: {e}"))?;
+    if !out.status.success() {
+        return Err(format!("{what} failed ({})", out.status));
+    }
+    let mut binaries = Vec::new();
+    let mut cli = None;
+    for line in String::from_utf8_lossy(&out.stdout).lines() {
+        let Ok(m) = serde_json::from_str::<serde_json::Value>(line) else {
+            continue;
+        };
+        let (Some(exe), Some(manifest)) = (m["executable"].as_str(), m["manifest_path"].as_str())
+        else {
+            continue;
+        };
+        let exe = PathBuf::from(exe);
+        if m["profile"]["test"].as_bool() == Some(true) {
+            let package_dir = Path::new(manifest)
+                .parent()
+                .map(Path::to_path_buf)
+                .unwrap_or_default();
+            binaries.push(TestBinary { package_dir, exe });
+        } else if m["target"]["name"] == "sylvan"
+            && m["target"]["kind"]
+                .as_array()
+                .is_some_and(|k| k.iter().any(|k| k == "bin"))
+        {
+            cli = Some(exe);
+        }
+    }
+    let cli = cli.ok_or("cargo test --workspace --no-run built no `sylvan` binary")?;
+    Ok((binaries, cli))
 }
 
 /// The Bevy plugin (`crates/sylvan-bevy`): fmt, clippy and its headless test. It is its own
