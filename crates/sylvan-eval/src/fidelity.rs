@@ -12,8 +12,8 @@ pub struct FidelityRow {
     pub technique: String,
     /// Mean ꟻLIP error against the reference; lower is better.
     pub flip_mean: f32,
-    /// Mean SSIM against the reference; higher is better.
-    pub ssim: f64,
+    /// Mean SSIM against the reference; higher is better (`None`: images under 11×11).
+    pub ssim: Option<f64>,
     /// PSNR against the reference in dB; `f64::INFINITY` when identical.
     pub psnr: f64,
 }
@@ -42,10 +42,13 @@ pub fn markdown_table(rows: &[FidelityRow]) -> String {
         } else {
             format!("{:.2}", r.psnr)
         };
+        let ssim = r
+            .ssim
+            .map_or_else(|| "n/a".to_owned(), |s| format!("{s:.4}"));
         let _ = writeln!(
             out,
-            "| {} | {} | {:.4} | {:.4} | {} |",
-            r.case, r.technique, r.flip_mean, r.ssim, psnr
+            "| {} | {} | {:.4} | {ssim} | {} |",
+            r.case, r.technique, r.flip_mean, psnr
         );
     }
     out
@@ -63,7 +66,7 @@ mod tests {
                 "geometry",
                 &Metrics {
                     flip_mean: 0.0,
-                    ssim: 1.0,
+                    ssim: Some(1.0),
                     psnr: f64::INFINITY,
                 },
             ),
@@ -72,7 +75,7 @@ mod tests {
                 "hbt",
                 &Metrics {
                     flip_mean: 0.123_45,
-                    ssim: 0.876_54,
+                    ssim: Some(0.876_54),
                     psnr: 31.234,
                 },
             ),

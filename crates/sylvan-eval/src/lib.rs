@@ -47,8 +47,9 @@ use serde::Serialize;
 pub struct Metrics {
     /// Mean ꟻLIP error in [0, 1]; 0 = identical.
     pub flip_mean: f32,
-    /// Mean SSIM of the luma, in [-1, 1]; 1 = identical.
-    pub ssim: f64,
+    /// Mean SSIM of the luma, in [-1, 1]; 1 = identical. `None` (JSON `null`) when the images
+    /// are smaller than SSIM's 11×11 window: ꟻLIP, PSNR and the means still apply there.
+    pub ssim: Option<f64>,
     /// PSNR over RGB in dB; `f64::INFINITY` when identical (serialised by `serde_json` as `null`).
     pub psnr: f64,
 }
@@ -57,8 +58,8 @@ pub struct Metrics {
 ///
 /// # Errors
 ///
-/// [`EvalError::SizeMismatch`] when the sizes differ, [`EvalError::Empty`] or
-/// [`EvalError::TooSmall`] when the images are smaller than SSIM's 11×11 window.
+/// [`EvalError::SizeMismatch`] when the sizes differ, [`EvalError::Empty`] when they are empty.
+/// Images smaller than SSIM's 11×11 window (a few rows of a render) are compared without it.
 pub fn compare(reference: &RgbImage, test: &RgbImage) -> Result<Metrics, EvalError> {
     compare_detailed(reference, test).map(|(metrics, _)| metrics)
 }
@@ -72,8 +73,12 @@ pub fn compare_detailed(
     reference: &RgbImage,
     test: &RgbImage,
 ) -> Result<(Metrics, Flip), EvalError> {
-    // SSIM first: it checks both the sizes and the minimum size, before any ꟻLIP work.
-    let ssim = ssim(reference, test)?;
+    // SSIM first: it checks both the sizes, before any ꟻLIP work.
+    let ssim = match ssim(reference, test) {
+        Ok(s) => Some(s),
+        Err(EvalError::TooSmall { .. }) => None,
+        Err(e) => return Err(e),
+    };
     let flip = flip(reference, test)?;
     let metrics = Metrics {
         flip_mean: flip.mean,

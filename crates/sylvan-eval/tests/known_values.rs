@@ -49,7 +49,10 @@ fn identical_images_are_perfect() {
     assert_eq!(ssim(&a, &a).unwrap(), 1.0);
     assert_eq!(psnr(&a, &a).unwrap(), f64::INFINITY);
     let m = compare(&a, &a).unwrap();
-    assert_eq!((m.flip_mean, m.ssim, m.psnr), (0.0, 1.0, f64::INFINITY));
+    assert_eq!(
+        (m.flip_mean, m.ssim, m.psnr),
+        (0.0, Some(1.0), f64::INFINITY)
+    );
 }
 
 #[test]
@@ -205,6 +208,15 @@ fn ssim_rejects_images_smaller_than_its_window() {
         }
     ));
     assert!(psnr(&a, &a).is_ok() && flip(&a, &a).is_ok());
+    // `compare` goes on without it: a few rows of a render are still worth a ꟻLIP and a PSNR.
+    let b = solid(10, 40, [0, 0, 8]);
+    let m = compare(&a, &b).unwrap();
+    assert_eq!(m.ssim, None);
+    assert!(m.flip_mean > 0.0 && m.psnr.is_finite());
+    assert_eq!(
+        serde_json::to_value(m).unwrap()["ssim"],
+        serde_json::Value::Null
+    );
     let empty = RgbImage::new(0, 0);
     assert!(matches!(psnr(&empty, &empty), Err(EvalError::Empty)));
     assert!(matches!(flip(&empty, &empty), Err(EvalError::Empty)));

@@ -159,3 +159,21 @@ fn size_mismatch_is_a_one_line_error() {
     assert!(line.contains("32x24") && line.contains("24x32"), "{line}");
     assert!(line.contains("a.png") && line.contains("b.png"), "{line}");
 }
+
+#[test]
+fn a_crop_of_a_few_rows_has_no_ssim_but_a_flip_and_means() {
+    let d = dir("few_rows");
+    let img = noise(32, 24);
+    let mut darker = img.clone();
+    darker.iter_mut().for_each(|v| *v /= 2);
+    let a = write(&d, "a.png", &img);
+    let b = write(&d, "b.png", &darker);
+    let v = json(&["compare", s(&a), s(&b), "--json", "--crop", "4,10,16,2"]);
+    assert!(v["ssim"].is_null(), "{v}");
+    assert!(v["flip_mean"].as_f64().unwrap() > 0.0, "{v}");
+    let (ma, mb) = (&v["mean_a"], &v["mean_b"]);
+    assert!((0..3).all(|i| mb[i].as_f64() < ma[i].as_f64()), "{v}");
+    let out = sylvan(&["compare", s(&a), s(&b), "--crop", "4,10,16,2"]);
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    assert!(out.status.success() && stdout.contains("SSIM n/a"), "{stdout}");
+}

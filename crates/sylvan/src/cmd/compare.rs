@@ -9,7 +9,7 @@ use sylvan_eval::{EvalError, Metrics};
 #[derive(clap::Args)]
 #[command(after_help = "\
 Metrics: FLIP (LDR, 67 pixels per degree; 0 = identical, lower is better), SSIM (Rec.709 luma, \
-11x11 Gaussian window; 1 = identical), PSNR (RGB, 8-bit, dB), and each image's mean colour in \
+11x11 Gaussian window; 1 = identical; n/a, null in JSON, for images smaller than that), PSNR (RGB, 8-bit, dB), and each image's mean colour in \
 linear light (sRGB decoded).
 With --json, identical images have infinite PSNR, which JSON cannot write: \"psnr\" is null then.")]
 pub struct CompareArgs {
@@ -73,7 +73,7 @@ pub fn run(args: CompareArgs) -> anyhow::Result<()> {
     }
     let (metrics, flip) = sylvan_eval::compare_detailed(&a, &b).map_err(|e| match e {
         // The library knows the sizes, not the files: name them.
-        EvalError::SizeMismatch { .. } | EvalError::TooSmall { .. } => {
+        EvalError::SizeMismatch { .. } | EvalError::Empty => {
             anyhow::Error::new(e).context(format!("{} vs {}", args.a.display(), args.b.display()))
         }
         e => e.into(),
@@ -118,10 +118,12 @@ fn human_line(m: &Metrics, p95: f32, max: f32, [a, b]: [[f64; 3]; 2]) -> String 
             "n/a".to_owned()
         }
     };
+    let ssim = m
+        .ssim
+        .map_or_else(|| "n/a (under 11x11)".to_owned(), |s| format!("{s:.4}"));
     format!(
-        "FLIP {:.4} (p95 {p95:.4}, max {max:.4})  SSIM {:.4}  PSNR {psnr}  mean B/A {} {} {} %",
+        "FLIP {:.4} (p95 {p95:.4}, max {max:.4})  SSIM {ssim}  PSNR {psnr}  mean B/A {} {} {} %",
         m.flip_mean,
-        m.ssim,
         bias(0),
         bias(1),
         bias(2)
