@@ -175,5 +175,8 @@ fn a_crop_of_a_few_rows_has_no_ssim_but_a_flip_and_means() {
     assert!((0..3).all(|i| mb[i].as_f64() < ma[i].as_f64()), "{v}");
     let out = sylvan(&["compare", s(&a), s(&b), "--crop", "4,10,16,2"]);
     let stdout = String::from_utf8(out.stdout).unwrap();
-    assert!(out.status.success() && stdout.contains("SSIM n/a"), "{stdout}");
+    assert!(
+        out.status.success() && stdout.contains("SSIM n/a"),
+        "{stdout}"
+    );
 }
