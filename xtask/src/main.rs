@@ -95,20 +95,17 @@ fn run(mut c: Command, what: &str) -> Result<(), String> {
     }
 }
 
-/// Builds the CLI (release or debug) and returns its path.
-fn build_cli(release: bool) -> Result<PathBuf, String> {
+/// Builds the release CLI (the demo's) and returns its path; `test` takes its CLI from the
+/// test build instead ([`build_tests`]).
+fn build_release_cli() -> Result<PathBuf, String> {
     let mut c = cargo();
-    c.args(["build", "--package", "sylvan"]);
-    if release {
-        c.arg("--release");
-    }
-    let profile = if release { "release" } else { "debug" };
-    run(c, &format!("building sylvan ({profile})"))?;
+    c.args(["build", "--package", "sylvan", "--release"]);
+    run(c, "building sylvan (release)")?;
     let target = std::env::var_os("CARGO_TARGET_DIR")
         .map(PathBuf::from)
         .map(|t| if t.is_absolute() { t } else { root().join(t) })
         .unwrap_or_else(|| root().join("target"));
-    Ok(target.join(profile).join("sylvan"))
+    Ok(target.join("release").join("sylvan"))
 }
 
 /// The adapter `sylvan adapter` finds on `backend` (`vulkan`, `gl`), its line printed.
@@ -232,7 +229,7 @@ fn ensure_xvfb() -> Result<(), String> {
 }
 
 fn demo() -> Result<(), String> {
-    let cli = build_cli(true)?;
+    let cli = build_release_cli()?;
     ensure_adapter(&cli, false)?;
     let out = root().join("out");
     std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;

@@ -33,6 +33,14 @@ fn write(dir: &Path, name: &str, img: &image::RgbImage) -> PathBuf {
     path
 }
 
+/// Writes `a.png` (noise, 32×24) and `b.png` (its sRGB values halved) into `dir`.
+fn noise_and_halved(dir: &Path) -> (PathBuf, PathBuf) {
+    let img = noise(32, 24);
+    let mut darker = img.clone();
+    darker.iter_mut().for_each(|v| *v /= 2);
+    (write(dir, "a.png", &img), write(dir, "b.png", &darker))
+}
+
 fn sylvan(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_sylvan"))
         .args(args)
@@ -107,11 +115,7 @@ fn offset_by_ten_json() {
 #[test]
 fn human_readable_line_and_heatmap() {
     let d = dir("heatmap");
-    let img = noise(32, 24);
-    let mut darker = img.clone();
-    darker.iter_mut().for_each(|v| *v /= 2);
-    let a = write(&d, "a.png", &img);
-    let b = write(&d, "b.png", &darker);
+    let (a, b) = noise_and_halved(&d);
     let heat = d.join("heat.png");
     let out = sylvan(&["compare", s(&a), s(&b), "--heatmap", s(&heat)]);
     assert!(
@@ -163,11 +167,7 @@ fn size_mismatch_is_a_one_line_error() {
 #[test]
 fn a_crop_of_a_few_rows_has_no_ssim_but_a_flip_and_means() {
     let d = dir("few_rows");
-    let img = noise(32, 24);
-    let mut darker = img.clone();
-    darker.iter_mut().for_each(|v| *v /= 2);
-    let a = write(&d, "a.png", &img);
-    let b = write(&d, "b.png", &darker);
+    let (a, b) = noise_and_halved(&d);
     let v = json(&["compare", s(&a), s(&b), "--json", "--crop", "4,10,16,2"]);
     assert!(v["ssim"].is_null(), "{v}");
     assert!(v["flip_mean"].as_f64().unwrap() > 0.0, "{v}");

@@ -45,8 +45,9 @@ pub struct ViewArgs {
     #[arg(long, value_name = "M", default_value_t = 1500.0, value_parser = parse_shadow_distance)]
     pub shadow_distance: f32,
     /// Start the first shadow cascade this far from the eye, metres (0: at the eye). Nearer
-    /// receivers are lit: for a reference of a far band whose shadows converge — every
-    /// cascade texel on that band (with a narrow view, `--size 16x160`, and `--shadow-res 8192`)
+    /// receivers are lit: for a reference of a far band with finer shadows — every cascade
+    /// texel on that band (with a narrow field of view and `--shadow-res 8192`, as
+    /// `scripts/measure-far-converged.sh` does)
     #[arg(long, value_name = "M", default_value_t = 0.0, value_parser = parse_shadow_near)]
     pub shadow_near: f32,
     /// Feed a GPU-driven technique from CPU-culled lists of every tree placed up front (the
