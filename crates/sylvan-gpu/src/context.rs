@@ -113,11 +113,13 @@ impl Gpu {
         let want =
             wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
         let timestamps = adapter.features().contains(want);
-        let features = if timestamps {
+        let mut features = if timestamps {
             want
         } else {
             wgpu::Features::empty()
         };
+        // GPU-written draws that start at an instance other than 0 (`boxtree`'s lists).
+        features |= adapter.features() & wgpu::Features::INDIRECT_FIRST_INSTANCE;
         // Ask for the adapter's own limits: big atlases and storage buffers need them, and
         // every allocation is checked against `device.limits()` first.
         let limits = adapter.limits();

@@ -614,12 +614,30 @@ impl Renderer {
     }
 
     /// Renders one frame from `camera` under `sun` into the output target and times it.
+    /// When the technique's GPU-written lists outgrew their buffers (they grow from what the
+    /// GPU counted), the frame is drawn again, so an offline picture is never missing trees.
     pub fn render(
         &mut self,
         gpu: &Gpu,
         camera: &Camera,
         sun: &Sun,
     ) -> Result<FrameStats, RenderError> {
+        let mut tries = 0;
+        loop {
+            let (stats, again) = self.render_once(gpu, camera, sun)?;
+            tries += 1;
+            if !again || tries == 4 {
+                return Ok(stats);
+            }
+        }
+    }
+
+    fn render_once(
+        &mut self,
+        gpu: &Gpu,
+        camera: &Camera,
+        sun: &Sun,
+    ) -> Result<(FrameStats, bool), RenderError> {
         if self.targets.is_none() {
             return Err(RenderError::Option(
                 "this renderer draws into a caller's target (Renderer::for_target): record each frame with prepare and draw".into(),
@@ -672,6 +690,7 @@ impl Renderer {
         let frame_ms = self.timer.read_ms(gpu)?;
         let split_ms = self.timer.split_ms().to_vec();
         gpu.check()?;
+        let again = self.technique.finish_frame(gpu)?;
         let mut shadow_counts = prepared.shadow;
         let mut world_stats = None;
         let mut trees_drawn_gpu = None;
@@ -701,7 +720,7 @@ impl Renderer {
             technique_stats.insert("world".to_string(), w.named());
         }
         technique_stats.insert("ground_cover".to_string(), self.cover.named());
-        Ok(FrameStats {
+        let stats = FrameStats {
             technique_stats,
             frame_ms,
             split_ms,
@@ -720,7 +739,8 @@ impl Renderer {
             draw_calls: main_counts.draw_calls + shadow_counts.draw_calls + 1,
             asset_bytes,
             gpu_bytes: self.gpu_bytes(),
-        })
+        };
+        Ok((stats, again))
     }
 
     /// GPU bytes of everything the renderer holds (assets, terrain, shadow maps, own targets,
@@ -814,7 +834,9 @@ impl Renderer {
             );
         }
 
+        let culled = self.world.as_ref().map(World::culled).unwrap_or_default();
         let input = FrameInput {
+            culled: &culled,
             eye: view.eye,
             pixels_per_metre: fv.pixels_per_metre,
             sun_dir,
@@ -839,7 +861,6 @@ impl Renderer {
             gpu.queue.write_buffer(buffer, 0, bytemuck::bytes_of(&r));
         }
 
-        let culled = self.world.as_ref().map(World::culled).unwrap_or_default();
         let mut shadow = DrawCounts::default();
         // The compute work recorded so far (tile uploads, the GPU cull, the techniques'
         // per-frame passes) is the frame's first part; a no-op outside `render`.
@@ -922,7 +943,8 @@ impl Renderer {
             let n: u32 = (0..world.groups(r)).map(|g| world.listed(r, 0, g)).sum();
             *drawn.entry(req.technique.to_string()).or_default() += n;
         }
-        let terrain = |p: usize| self.terrain.visible_triangles(p);
+        let terrain =
+            |p: usize| self.terrain.visible_triangles(p) + self.technique.own_triangles(p);
         let shadow = (1..=CASCADES)
             .filter(|_| self.shadows_now)
             .map(|p| terrain(p) + tris(p))

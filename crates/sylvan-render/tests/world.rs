@@ -120,6 +120,46 @@ fn gpu_cull_draws_what_the_cpu_lists_drew() {
     }
 }
 
+/// `boxtree`'s GPU traversal writes lists whose sizes only the GPU knows: a first frame that
+/// opens more boxes than its buffers hold grows them and is drawn again, so the picture is
+/// still the CPU traversal's.
+#[test]
+fn boxtree_lists_grow_and_the_frame_is_drawn_again() {
+    let gpu = gpu();
+    let world = sylvan_scene::World {
+        tile_m: 64.0,
+        ..Default::default()
+    };
+    let s = forest_scene(300.0, 400.0, world);
+    let frame = |cpu_driven: bool| {
+        let options = RenderOptions {
+            width: 128,
+            height: 128,
+            shadow_resolution: 512,
+            cpu_driven,
+            technique: "boxtree".into(),
+            // Lists of 256 records at first: both outgrow them.
+            settings: vec![sylvan_scene::Setting::from_arg("boxtree.initial_lists=256").unwrap()],
+            cache: sylvan_render::bake::CachePolicy::Off,
+            ..Default::default()
+        };
+        let mut r = Renderer::new(&gpu, &s, &[test_tree()], &options).expect("renderer");
+        let stats = r.render(&gpu, &s.camera, &s.sun).expect("frame");
+        let img = image::DynamicImage::ImageRgba8(r.read_image(&gpu).unwrap()).into_rgb8();
+        (img, stats)
+    };
+    let (cpu, cpu_stats) = frame(true);
+    let (gpu_img, gpu_stats) = frame(false);
+    let own = &gpu_stats.technique_stats["boxtree"];
+    eprintln!("{own:?}, {} triangles", gpu_stats.triangles);
+    assert!(own["list_growths"] >= 1.0, "{own:?}");
+    assert_eq!(own["records_dropped"], 0.0, "{own:?}");
+    assert_eq!(gpu_stats.triangles, cpu_stats.triangles);
+    assert_eq!(gpu_stats.shadow_triangles, cpu_stats.shadow_triangles);
+    let f = sylvan_eval::flip(&cpu, &gpu_img).unwrap();
+    assert!(f.mean <= 0.005, "FLIP {}", f.mean);
+}
+
 /// A `wang` forest seeded on the GPU (BN12 §4) draws the trees, triangles and picture the CPU
 /// tile workers gave; tiles holding or near the placed trees stay on the CPU.
 #[test]

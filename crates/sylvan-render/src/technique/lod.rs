@@ -395,14 +395,30 @@ impl Technique for Chain {
             input.instances,
             input.eye,
         );
-        for (t, list) in self.techniques.iter_mut().zip(&self.lists) {
+        for (i, (t, list)) in self.techniques.iter_mut().zip(&self.lists).enumerate() {
             let sub = FrameInput {
                 instances: list,
+                culled: input
+                    .culled
+                    .get(self.firsts[i]..self.firsts[i + 1])
+                    .unwrap_or(&[]),
                 ..*input
             };
             t.prepare_frame(gpu, encoder, &sub)?;
         }
         Ok(())
+    }
+
+    fn finish_frame(&mut self, gpu: &Gpu) -> Result<bool, RenderError> {
+        let mut again = false;
+        for t in &mut self.techniques {
+            again |= t.finish_frame(gpu)?;
+        }
+        Ok(again)
+    }
+
+    fn own_triangles(&self, pass: usize) -> u64 {
+        self.techniques.iter().map(|t| t.own_triangles(pass)).sum()
     }
 
     fn draw(&self, pass: &mut wgpu::RenderPass<'_>, ctx: &DrawContext<'_>) -> DrawCounts {

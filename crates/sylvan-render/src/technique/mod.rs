@@ -18,8 +18,7 @@
 //! | `zfield` | [`zfield`] | BN12 §5, §8: z-fields, sun/sky lighting, per-tree coverage masks |
 //! | `auto` | [`lod`] | the LOD chain: a technique per distance band, cross-faded |
 //!
-//! GPU-driven techniques (`Entry::gpu_driven`: `geometry`, `octahedral`, `billboard-cloud`,
-//! `zfield`, a chain of those)
+//! GPU-driven techniques (`Entry::gpu_driven`: all but `hbt`, and a chain of those)
 //! draw the tiled world from [`DrawContext::culled`] ([`crate::world`]); the others get every
 //! tree on the CPU in [`FrameInput::instances`].
 //!
@@ -226,6 +225,17 @@ pub trait Technique: Send {
     fn reallocations(&self) -> u32 {
         0
     }
+    /// After the frame's submission has completed (`Renderer::render`): reads back what the
+    /// technique's own GPU passes counted. True when the frame drew less than it listed (a
+    /// GPU-written list outgrew its buffer, now grown): the renderer draws the frame again.
+    fn finish_frame(&mut self, _gpu: &Gpu) -> Result<bool, RenderError> {
+        Ok(false)
+    }
+    /// Triangles of the last frame read back that the technique's own GPU passes listed in
+    /// pass `pass` (beyond those of its [`Technique::indirect_draws`], which the world counts).
+    fn own_triangles(&self, _pass: usize) -> u64 {
+        0
+    }
     /// A GPU-driven technique's draws per (pass, species) list, in the order it draws them
     /// ([`crate::world::Culled::args`]'s `k`); empty for a technique fed on the CPU.
     fn indirect_draws(&self) -> Vec<crate::world::IndirectDraw> {
@@ -281,6 +291,10 @@ pub struct FrameInput<'a> {
     pub shadow_texel_m: [f32; crate::frame::CASCADES],
     /// Eye distance where each cascade ends (metres).
     pub cascade_far: [f32; crate::frame::CASCADES],
+    /// The GPU cull's lists of this frame, one per [`Technique::list_requests`] entry
+    /// (recorded before `prepare_frame`: compute passes may read them); empty when the trees
+    /// come from `instances`.
+    pub culled: &'a [crate::world::Culled<'a>],
 }
 
 /// What a technique needs to draw one pass.

@@ -196,6 +196,23 @@ impl Culled<'_> {
         )
     }
 
+    /// The (pass, group) list's first record in [`Culled::trees_buffer`] and its capacity.
+    pub fn list(&self, pass: usize, group: usize) -> (u32, u32) {
+        let i = pass * self.groups + group;
+        (self.offsets[i], self.capacity[i])
+    }
+
+    /// Every list's records (see [`Culled::list`]), for a technique's compute passes.
+    pub fn trees_buffer(&self) -> &wgpu::Buffer {
+        self.trees
+    }
+
+    /// The indirect arguments of every draw (see [`Culled::args`]; the instance count is
+    /// the second word), for a technique's compute passes.
+    pub fn args_buffer(&self) -> &wgpu::Buffer {
+        self.args
+    }
+
     /// Trees in the (pass, group) list in the last frame read back (for statistics).
     pub fn listed(&self, pass: usize, group: usize) -> u32 {
         self.listed[pass * self.groups + group]

@@ -1,6 +1,7 @@
 //! The GPU side of `boxtree`: atlas upload, per-frame traversal into instance lists, passes.
 
 use super::bake::{BakedBox, BoxTreeBaked};
+use super::gpu::{GpuTraversal, SpeciesBoxes};
 use super::traverse::{self, LodView, Placement};
 use super::{BoxTreeBakeParams, BoxTreeDrawParams, MAX_BOXES};
 use crate::RenderError;
@@ -10,6 +11,7 @@ use crate::instances::GpuTreeInstance;
 use crate::technique::common::{self, Growable, TileAtlas};
 use crate::technique::geometry::{LEAF_TRANSLUCENCY, MeshPipelines, SpeciesMeshes};
 use crate::technique::{DrawContext, DrawCounts, FrameInput, Technique};
+use crate::world::{Culled, IndirectDraw};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use std::ops::Range;
@@ -20,7 +22,7 @@ use wgpu::util::DeviceExt;
 const PASSES: usize = 1 + CASCADES;
 /// Shadow-map texels a box texel may cover before the box opens in a cascade, for trees whose
 /// shadows fall outside it (the 3×3 PCF footprint).
-const SHADOW_FOOTPRINT_TEXELS: f32 = 3.0;
+pub(super) const SHADOW_FOOTPRINT_TEXELS: f32 = 3.0;
 const MAX_PLANES: usize = 6;
 
 #[repr(C)]
@@ -51,7 +53,7 @@ struct GpuAtlas {
 /// One box drawn as images by one tree (vertex locations 4–6, per instance).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable, Debug, PartialEq)]
-struct GpuImpostor {
+pub(super) struct GpuImpostor {
     base_scale: [f32; 4],
     /// cos, sin, tint seed, presence.
     rot: [f32; 4],
@@ -99,6 +101,8 @@ pub struct BoxTree {
     imp_ranges: [Range<u32>; PASSES],
     /// `res_ranges[pass][global box]`.
     res_ranges: Vec<Vec<Range<u32>>>,
+    /// The GPU-driven frame's traversal (made on the first frame drawn from the world).
+    traversal: Option<GpuTraversal>,
 }
 
 /// One row per plant of its root box's images, premultiplied colour over mid-grey.
@@ -321,6 +325,7 @@ impl BoxTree {
             stack: Vec::new(),
             imp_ranges: std::array::from_fn(|_| 0..0),
             res_ranges: vec![vec![0..0; total_boxes]; PASSES],
+            traversal: None,
         })
     }
 }
@@ -330,13 +335,31 @@ impl Technique for BoxTree {
         super::ENTRY.name
     }
 
-    /// Per frame: each culled tree's box-tree traversal per pass, sorted and uploaded.
+    /// Per frame: each culled tree's box-tree traversal per pass — on the GPU from the
+    /// world's lists ([`GpuTraversal`]), or on the CPU from the frame's instances, sorted and
+    /// uploaded.
     fn prepare_frame(
         &mut self,
         gpu: &Gpu,
-        _: &mut wgpu::CommandEncoder,
+        encoder: &mut wgpu::CommandEncoder,
         input: &FrameInput<'_>,
     ) -> Result<(), RenderError> {
+        if let Some(culled) = input.culled.first() {
+            if self.traversal.is_none() {
+                let species: Vec<SpeciesBoxes<'_>> = self
+                    .species
+                    .iter()
+                    .map(|s| SpeciesBoxes {
+                        boxes: &s.boxes,
+                        box_base: s.box_base,
+                        bake_wood: s.bake_wood,
+                    })
+                    .collect();
+                self.traversal = Some(GpuTraversal::new(gpu, &species, self.planes * 6)?);
+            }
+            let traversal = self.traversal.as_mut().expect("made above");
+            return traversal.record(gpu, encoder, culled, input, self.species.len(), &self.draw);
+        }
         let camera = LodView {
             eye: input.eye,
             pixels_per_metre: input.pixels_per_metre / self.draw.texel_pixels,
@@ -427,7 +450,56 @@ impl Technique for BoxTree {
     }
 
     fn bytes(&self) -> u64 {
-        self.static_bytes + self.impostors.buffer.size() + self.residual.buffer.size()
+        self.static_bytes
+            + self.impostors.buffer.size()
+            + self.residual.buffer.size()
+            + self.traversal.as_ref().map_or(0, GpuTraversal::bytes)
+    }
+
+    /// One draw per species: all its wood when wood is not baked into the images, else none
+    /// (0 vertices) — the traversal reads each list's count from these arguments.
+    fn indirect_draws(&self) -> Vec<IndirectDraw> {
+        self.species
+            .iter()
+            .enumerate()
+            .map(|(s, sp)| match (&sp.meshes.wood, sp.bake_wood) {
+                (Some(_), false) => IndirectDraw::indexed(s as u32, sp.wood_all.end, 0),
+                _ => IndirectDraw::vertices(s as u32, 0),
+            })
+            .collect()
+    }
+
+    fn finish_frame(&mut self, gpu: &Gpu) -> Result<bool, RenderError> {
+        match &mut self.traversal {
+            Some(t) => t.finish(gpu),
+            None => Ok(false),
+        }
+    }
+
+    fn own_triangles(&self, pass: usize) -> u64 {
+        let Some(t) = &self.traversal else { return 0 };
+        let mut tris = t.impostors(pass) as u64 * self.planes as u64 * 2;
+        for sp in &self.species {
+            for (b, bx) in sp.boxes.iter().enumerate() {
+                let mut per_tree = bx.residual_leaves.len() as u64 / 3;
+                if sp.bake_wood {
+                    per_tree += bx.residual_wood.len() as u64 / 3;
+                }
+                tris += t.opened(pass, sp.box_base + b as u32) as u64 * per_tree;
+            }
+        }
+        tris
+    }
+
+    fn stats(&self) -> Vec<(&'static str, f64)> {
+        match &self.traversal {
+            Some(t) => vec![
+                ("impostors", t.impostors(0) as f64),
+                ("records_dropped", t.dropped as f64),
+                ("list_growths", t.reallocations as f64),
+            ],
+            None => Vec::new(),
+        }
     }
 
     fn atlas_preview(&self) -> Option<&image::RgbaImage> {
@@ -435,7 +507,9 @@ impl Technique for BoxTree {
     }
 
     fn reallocations(&self) -> u32 {
-        self.impostors.reallocations + self.residual.reallocations
+        self.impostors.reallocations
+            + self.residual.reallocations
+            + self.traversal.as_ref().map_or(0, |t| t.reallocations)
     }
 }
 
@@ -446,6 +520,9 @@ impl BoxTree {
         ctx: &DrawContext<'_>,
         shadow: bool,
     ) -> DrawCounts {
+        if let (Some(culled), Some(t)) = (ctx.culled.first(), &self.traversal) {
+            return self.record_indirect(pass, ctx, culled, t, shadow);
+        }
         let mut counts = DrawCounts::default();
         let p = ctx.pass;
         pass.set_bind_group(0, ctx.frame_bind, &[]);
@@ -498,6 +575,74 @@ impl BoxTree {
                 triangles: n as u64 * self.planes as u64 * 2,
             };
         }
+        counts
+    }
+}
+
+impl BoxTree {
+    /// The GPU-driven pass: the opened boxes' geometry and the impostors from the
+    /// traversal's lists, every draw indirect (the counts are the last frame's read back).
+    fn record_indirect(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        ctx: &DrawContext<'_>,
+        culled: &Culled<'_>,
+        t: &GpuTraversal,
+        shadow: bool,
+    ) -> DrawCounts {
+        let mut counts = DrawCounts::default();
+        let p = ctx.pass;
+        pass.set_bind_group(0, ctx.frame_bind, &[]);
+        let (wood, leaf) = self.pipes.for_pass(shadow);
+        for (pipeline, is_wood) in [(wood, true), (leaf, false)] {
+            pass.set_pipeline(pipeline);
+            for (s, sp) in self.species.iter().enumerate() {
+                let mesh = if is_wood {
+                    &sp.meshes.wood
+                } else {
+                    &sp.meshes.leaves
+                };
+                let Some(mesh) = mesh else { continue };
+                pass.set_bind_group(1, &sp.meshes.material, &[]);
+                pass.set_vertex_buffer(0, mesh.vertices.slice(..));
+                pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
+                if is_wood && !sp.bake_wood {
+                    let Some(instances) = culled.instances(p, s) else {
+                        continue;
+                    };
+                    pass.set_vertex_buffer(1, instances);
+                    let (args, offset) = culled.args(p, s);
+                    pass.draw_indexed_indirect(args, offset);
+                    counts.draw_calls += 1;
+                    continue;
+                }
+                pass.set_vertex_buffer(1, t.out_res.slice(..));
+                for (b, bx) in sp.boxes.iter().enumerate() {
+                    let range = if is_wood {
+                        &bx.residual_wood
+                    } else {
+                        &bx.residual_leaves
+                    };
+                    if range.is_empty() {
+                        continue;
+                    }
+                    let (args, offset) = t.residual_args(p, sp.box_base + b as u32, !is_wood);
+                    pass.draw_indexed_indirect(args, offset);
+                    counts.draw_calls += 1;
+                }
+            }
+        }
+        pass.set_pipeline(if shadow {
+            &self.impostor_shadow
+        } else {
+            &self.impostor
+        });
+        pass.set_bind_group(1, &self.bind, &[]);
+        pass.set_vertex_buffer(1, t.out_imp.slice(..));
+        let (args, offset) = t.impostor_args(p);
+        pass.draw_indirect(args, offset);
+        counts.draw_calls += 1;
+        counts.triangles = self.own_triangles(p);
         counts
     }
 }

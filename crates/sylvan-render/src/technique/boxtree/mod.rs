@@ -36,14 +36,21 @@
 //! - Diagonal planes use one image per plane, seen mirrored from behind (normal reflected), so
 //!   both layouts store six images per box as in the paper.
 //!
-//! Cost: per frame, a CPU traversal of each culled tree's box tree per pass; impostors of all
-//! trees and species in one instanced draw per pass (sorted back to front in the main pass);
-//! residual geometry one instanced draw per (species, opened box) for wood and for leaves.
+//! Cost: drawn from the tiled world (GPU-driven, the default), the traversal runs in compute
+//! passes over the world cull's lists (`gpu.rs`, `traverse.wgsl`: one invocation per listed
+//! tree and pass walks its box tree in pre-order; impostors and opened boxes are counted into
+//! segments — the camera's impostors by distance bucket, far first — and scattered into
+//! compacted lists with their indirect draw arguments): the CPU records per (pass, species)
+//! and box, never per tree. With `--cpu-driven` the same traversal runs on the CPU
+//! ([`traverse`]) for every culled tree per pass. Either way: impostors of all trees and
+//! species in one instanced draw per pass (sorted back to front in the main pass); residual
+//! geometry one instanced draw per (species, opened box) for wood and for leaves.
 //! Limits: at most [`MAX_BOXES`] boxes per plant; the atlas must fit the device's texture
 //! size and array-layer limits (checked before allocating).
 
 pub mod bake;
 mod draw;
+mod gpu;
 pub mod traverse;
 
 pub use crate::bake::views::PlaneLayout;
@@ -168,6 +175,11 @@ pub struct BoxTreeDrawParams {
     pub texel_pixels: f32,
     /// Width of the transition band, relative to the LOD distance.
     pub band: f32,
+    /// GPU-driven frame: records the impostor and opened-box lists hold at first (0: one
+    /// impostor per listed tree and 16,384 opened boxes). They grow from what the GPU counted;
+    /// a frame that outgrows them is drawn again by `Renderer::render` (an embedding caller
+    /// misses the overflow for one frame).
+    pub initial_lists: u32,
 }
 
 impl Default for BoxTreeDrawParams {
@@ -175,6 +187,7 @@ impl Default for BoxTreeDrawParams {
         Self {
             texel_pixels: 0.8,
             band: 0.5,
+            initial_lists: 0,
         }
     }
 }
@@ -191,6 +204,11 @@ impl ParamTable for BoxTreeDrawParams {
             unit: "× LOD distance",
             doc: "width of the cross-fade band between levels (0 = hard switches; LCV04 §4.2)",
         },
+        ParamDoc {
+            key: "initial_lists",
+            unit: "records",
+            doc: "GPU-driven frame: records the impostor and opened-box lists hold at first (0: one impostor per listed tree, 16384 opened boxes); they grow from the GPU's counts, and a frame that outgrew them is drawn again",
+        },
     ];
 
     fn validate(&self) -> Result<(), String> {
@@ -204,6 +222,12 @@ impl ParamTable for BoxTreeDrawParams {
         if !(self.band.is_finite() && (0.0..=4.0).contains(&self.band)) {
             return Err(format!("band {}: must be 0 to 4", self.band));
         }
+        if self.initial_lists > 1 << 24 {
+            return Err(format!(
+                "initial_lists {}: must be at most 16777216 (0: sized from the first frame's lists)",
+                self.initial_lists
+            ));
+        }
         Ok(())
     }
 }
@@ -214,7 +238,7 @@ pub const ENTRY: Entry = Entry {
     kind: Kind::PerTree,
     summary: "LCV04: a bounding-box hierarchy with six images per box, opened by distance",
     debug_color: [0.1, 0.5, 1.0],
-    gpu_driven: false,
+    gpu_driven: true,
     schema: params::schema::<BoxTreeBakeParams, BoxTreeDrawParams>,
     check: |s| params::resolve::<BoxTreeBakeParams, BoxTreeDrawParams>("boxtree", s).map(|_| ()),
     build: |cx| {
