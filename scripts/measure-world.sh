@@ -2,7 +2,9 @@
 # The tiled world (#15): CPU per frame, startup and memory at 10k, 100k, 1M and 10M trees,
 # GPU-driven against the CPU-driven frame (--cpu-driven: every tree placed up front, culled
 # on the CPU each frame), same run. Writes one JSON line per run to $OUT/world.jsonl.
-# Usage: [SCALE=0] [PICTURES=0] scripts/measure-world.sh [OUT] (default /tmp/sylvan-world);
+# Usage: [SCALE=0] [PICTURES=0] [TECHNIQUES="octahedral boxtree"] scripts/measure-world.sh [OUT]
+# (default /tmp/sylvan-world; SCALE runs each of TECHNIQUES, default octahedral, PICTURES
+# each of them too, default geometry and octahedral; ONLY="scene.toml …" limits PICTURES);
 # ~10 min each part on 2 cores.
 set -euo pipefail
 OUT=${1:-/tmp/sylvan-world}
@@ -29,16 +31,18 @@ print(f"{label:12} {scene:5} {d['technique']:10} cpu {d['cpu_ms']['median']:8.2f
 PY
 }
 if [ "${SCALE:-1}" = 1 ]; then
-  for scene in 10k 100k 1m 10m; do
-    run gpu-driven octahedral "$scene"
-    [ "$scene" = 10m ] || run cpu-driven octahedral "$scene" --cpu-driven
+  for technique in ${TECHNIQUES:-octahedral}; do
+    for scene in 10k 100k 1m 10m; do
+      run gpu-driven "$technique" "$scene"
+      [ "$scene" = 10m ] || run cpu-driven "$technique" "$scene" --cpu-driven
+    done
   done
 fi
 
 # Same pictures: each GPU-driven technique's frame against the CPU-driven one (FLIP, trees drawn).
 pictures() { # scene-or-empty label
   local scene=$1 label=$2
-  for technique in geometry octahedral; do
+  for technique in ${TECHNIQUES:-geometry octahedral}; do
     for mode in gpu cpu; do
       local flag=""
       [ "$mode" = cpu ] && flag=--cpu-driven
