@@ -255,7 +255,15 @@ pub const ENTRY: Entry = Entry {
         })
     },
     bake: Some(registry::bake_with::<BoxTreeBake, BoxTreeDrawParams>),
-    shaders: || vec![("boxtree", shader_source())],
+    shaders: || {
+        vec![
+            ("boxtree", shader_source()),
+            (
+                "boxtree_traverse",
+                include_str!("traverse.wgsl").to_string(),
+            ),
+        ]
+    },
 };
 
 /// The WGSL of `boxtree` as compiled: the frame's group 0, `bindings.wgsl` (group 1), then
