@@ -514,6 +514,21 @@ impl Technique for BoxTree {
 }
 
 impl BoxTree {
+    /// Each species with a wood (`wood`) or leaf mesh, with that mesh.
+    fn meshes(
+        &self,
+        wood: bool,
+    ) -> impl Iterator<Item = (usize, &Species, &crate::technique::geometry::GpuMesh)> {
+        self.species.iter().enumerate().filter_map(move |(s, sp)| {
+            let mesh = if wood {
+                &sp.meshes.wood
+            } else {
+                &sp.meshes.leaves
+            };
+            mesh.as_ref().map(|m| (s, sp, m))
+        })
+    }
+
     fn record(
         &self,
         pass: &mut wgpu::RenderPass<'_>,
@@ -530,13 +545,7 @@ impl BoxTree {
         let (wood, leaf) = self.pipes.for_pass(shadow);
         for (pipeline, is_wood) in [(wood, true), (leaf, false)] {
             pass.set_pipeline(pipeline);
-            for (s, sp) in self.species.iter().enumerate() {
-                let mesh = if is_wood {
-                    &sp.meshes.wood
-                } else {
-                    &sp.meshes.leaves
-                };
-                let Some(mesh) = mesh else { continue };
+            for (s, sp, mesh) in self.meshes(is_wood) {
                 pass.set_bind_group(1, &sp.meshes.material, &[]);
                 if is_wood && !sp.bake_wood {
                     counts += mesh.draw_range(
@@ -596,13 +605,7 @@ impl BoxTree {
         let (wood, leaf) = self.pipes.for_pass(shadow);
         for (pipeline, is_wood) in [(wood, true), (leaf, false)] {
             pass.set_pipeline(pipeline);
-            for (s, sp) in self.species.iter().enumerate() {
-                let mesh = if is_wood {
-                    &sp.meshes.wood
-                } else {
-                    &sp.meshes.leaves
-                };
-                let Some(mesh) = mesh else { continue };
+            for (s, sp, mesh) in self.meshes(is_wood) {
                 pass.set_bind_group(1, &sp.meshes.material, &[]);
                 pass.set_vertex_buffer(0, mesh.vertices.slice(..));
                 pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);

@@ -163,8 +163,9 @@ pub(super) struct GpuTraversal {
     pub out_res: wgpu::Buffer,
     /// Capacities (records) of the impostor and residual lists.
     caps: [u32; 2],
-    /// Whether the capacities were set from a frame's lists yet.
-    sized: bool,
+    /// The traversal's bind group, with the cull's trees and arguments buffers it binds
+    /// (made again when one of them, or a list of ours, was replaced).
+    bind: Option<(wgpu::BindGroup, wgpu::Buffer, wgpu::Buffer)>,
     boxes: u32,
     vertices: u32,
     readback: LateReadback,
@@ -182,6 +183,31 @@ fn storage(gpu: &Gpu, label: &str, extra: wgpu::BufferUsages, bytes: u64) -> wgp
         usage: wgpu::BufferUsages::STORAGE | extra,
         mapped_at_creation: false,
     })
+}
+
+/// A list of `records`: its parked records (`parked` bytes each) and its output (`out` bytes
+/// each, a vertex buffer).
+fn lists(
+    gpu: &Gpu,
+    label: &str,
+    records: u32,
+    parked: u64,
+    out: u64,
+) -> (wgpu::Buffer, wgpu::Buffer) {
+    (
+        storage(
+            gpu,
+            &format!("boxtree_parked_{label}"),
+            wgpu::BufferUsages::empty(),
+            records as u64 * parked,
+        ),
+        storage(
+            gpu,
+            &format!("boxtree_{label}"),
+            wgpu::BufferUsages::VERTEX,
+            records as u64 * out,
+        ),
+    )
 }
 
 impl GpuTraversal {
@@ -266,11 +292,12 @@ impl GpuTraversal {
         };
         let segs = IMP_SEGS + PASSES as u32 * boxes;
         let counter_words = (C_SEG + 2 * segs) as u64;
-        let u = wgpu::BufferUsages::empty();
         let mut tables_rows = rows;
         tables_rows.extend(box_rows);
-        // Placeholders until the first frame sizes them.
-        let caps = [256u32, 256];
+        // Placeholder buffers: capacity 0 until the first frame sizes the lists.
+        let caps = [0u32, 0];
+        let (parked_imp, out_imp) = lists(gpu, "impostors", 0, 32, IMPOSTOR_BYTES);
+        let (parked_res, out_res) = lists(gpu, "residual", 0, 16, TREE_BYTES);
         Ok(Self {
             prep: compute("prep", true),
             traverse: compute("traverse", false),
@@ -303,22 +330,12 @@ impl GpuTraversal {
                 wgpu::BufferUsages::INDIRECT,
                 (A_RES + 5 * 2 * (PASSES as u64) * boxes as u64) * 4,
             ),
-            parked_imp: storage(gpu, "boxtree_parked_imp", u, caps[0] as u64 * 32),
-            parked_res: storage(gpu, "boxtree_parked_res", u, caps[1] as u64 * 16),
-            out_imp: storage(
-                gpu,
-                "boxtree_impostors",
-                wgpu::BufferUsages::VERTEX,
-                caps[0] as u64 * IMPOSTOR_BYTES,
-            ),
-            out_res: storage(
-                gpu,
-                "boxtree_residual",
-                wgpu::BufferUsages::VERTEX,
-                caps[1] as u64 * TREE_BYTES,
-            ),
+            parked_imp,
+            parked_res,
+            out_imp,
+            out_res,
             caps,
-            sized: false,
+            bind: None,
             boxes,
             vertices,
             readback: LateReadback::new(gpu, (C_SEG + segs) as u64 * 4),
@@ -383,15 +400,13 @@ impl GpuTraversal {
                 n += 1;
             }
         }
-        if !self.sized {
+        if self.caps[0] == 0 {
             // First frame: room for one impostor per listed tree; later frames grow from the
             // counts read back.
-            self.sized = true;
             let want = match draw.initial_lists {
                 0 => [upper.min(u32::MAX as u64 - 4096) as u32 + 4096, 1 << 14],
                 n => [n, n],
             };
-            self.caps = [0, 0];
             self.grow(gpu, want)?;
         }
         let ppm = input.pixels_per_metre / texel_pixels;
@@ -426,23 +441,32 @@ impl GpuTraversal {
         params.info[1] = self.box_row();
         gpu.queue
             .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-        let bind = crate::technique::common::bind_group(
-            gpu,
-            "boxtree_traverse_bind",
-            &self.layout,
-            &[
-                self.params.as_entire_binding(),
-                culled.trees_buffer().as_entire_binding(),
-                culled.args_buffer().as_entire_binding(),
-                self.tables.as_entire_binding(),
-                self.counters.as_entire_binding(),
-                self.parked_imp.as_entire_binding(),
-                self.parked_res.as_entire_binding(),
-                self.out_imp.as_entire_binding(),
-                self.out_res.as_entire_binding(),
-                self.args.as_entire_binding(),
-            ],
-        );
+        let (trees, world_args) = (culled.trees_buffer(), culled.args_buffer());
+        if self
+            .bind
+            .as_ref()
+            .is_none_or(|b| &b.1 != trees || &b.2 != world_args)
+        {
+            let bind = crate::technique::common::bind_group(
+                gpu,
+                "boxtree_traverse_bind",
+                &self.layout,
+                &[
+                    self.params.as_entire_binding(),
+                    trees.as_entire_binding(),
+                    world_args.as_entire_binding(),
+                    self.tables.as_entire_binding(),
+                    self.counters.as_entire_binding(),
+                    self.parked_imp.as_entire_binding(),
+                    self.parked_res.as_entire_binding(),
+                    self.out_imp.as_entire_binding(),
+                    self.out_res.as_entire_binding(),
+                    self.args.as_entire_binding(),
+                ],
+            );
+            self.bind = Some((bind, trees.clone(), world_args.clone()));
+        }
+        let bind = &self.bind.as_ref().expect("made above").0;
         encoder.clear_buffer(&self.counters, 0, None);
         // One compute pass per step: a pass that bound the dispatch buffer for writing must
         // not be the one reading it as indirect arguments.
@@ -455,7 +479,7 @@ impl GpuTraversal {
                 timestamp_writes: None,
             });
             pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, &bind, &[]);
+            pass.set_bind_group(0, bind, &[]);
             if writes_dispatch {
                 pass.set_bind_group(1, &self.dispatch_bind, &[]);
             }
@@ -523,26 +547,15 @@ impl GpuTraversal {
         };
         let imp = fit(want[0], IMPOSTOR_BYTES);
         let res = fit(want[1], TREE_BYTES);
-        let u = wgpu::BufferUsages::empty();
         if imp > self.caps[0] {
-            self.parked_imp = storage(gpu, "boxtree_parked_imp", u, imp as u64 * 32);
-            self.out_imp = storage(
-                gpu,
-                "boxtree_impostors",
-                wgpu::BufferUsages::VERTEX,
-                imp as u64 * IMPOSTOR_BYTES,
-            );
+            (self.parked_imp, self.out_imp) = lists(gpu, "impostors", imp, 32, IMPOSTOR_BYTES);
             self.caps[0] = imp;
+            self.bind = None;
         }
         if res > self.caps[1] {
-            self.parked_res = storage(gpu, "boxtree_parked_res", u, res as u64 * 16);
-            self.out_res = storage(
-                gpu,
-                "boxtree_residual",
-                wgpu::BufferUsages::VERTEX,
-                res as u64 * TREE_BYTES,
-            );
+            (self.parked_res, self.out_res) = lists(gpu, "residual", res, 16, TREE_BYTES);
             self.caps[1] = res;
+            self.bind = None;
         }
         Ok(())
     }
