@@ -67,6 +67,10 @@ pub struct RenderOptions {
     /// Where a `wang` forest's tiles are seeded: on the GPU ([`crate::world`]'s seed
     /// producer, BN12 §4) or by the CPU workers (the same trees either way).
     pub seeds: Seeds,
+    /// Cull the camera pass's trees against the previous frame's depth pyramid
+    /// ([`crate::world`]'s occlusion cull: GPU-driven frames into Sylvan's own target only;
+    /// one frame late, so off by default).
+    pub occlusion_cull: bool,
 }
 
 /// Where a `wang` forest's tiles are seeded ([`RenderOptions::seeds`]).
@@ -112,6 +116,7 @@ impl Default for RenderOptions {
             cpu_driven: false,
             caster_cull: true,
             seeds: Seeds::Auto,
+            occlusion_cull: false,
         }
     }
 }
@@ -506,14 +511,28 @@ impl Renderer {
             f32::max,
         );
         let requests = technique.list_requests();
+        if options.occlusion_cull && (!gpu_driven || caller_target.is_some()) {
+            return Err(RenderError::Option(format!(
+                "--occlusion-cull: {} — leave it off{}",
+                if caller_target.is_some() {
+                    "the occlusion cull reduces Sylvan's own depth target, and this renderer draws into the caller's"
+                } else {
+                    "the occlusion cull is part of the GPU-driven frame, and this one is CPU-driven"
+                },
+                if caller_target.is_none() && options.cpu_driven {
+                    " or drop --cpu-driven"
+                } else {
+                    ""
+                }
+            )));
+        }
         let world = match gpu_driven {
-            true => Some(World::new(
-                gpu,
-                scene,
-                source,
-                &requests,
-                options.seeds.on_gpu(gpu),
-            )?),
+            true => {
+                let mut world =
+                    World::new(gpu, scene, source, &requests, options.seeds.on_gpu(gpu))?;
+                world.set_occlusion(gpu, options.occlusion_cull);
+                Some(world)
+            }
             false => None,
         };
         let renderer = Self {
@@ -675,6 +694,17 @@ impl Renderer {
             &mut main_pass(&mut encoder, &t.hdr, far_depth, false),
             Layers::TREES,
         );
+        // The occlusion cull's pyramid for the next frame (timed with the trees it culls).
+        if let Some(world) = &mut self.world {
+            world.reduce_depth(
+                gpu,
+                &mut encoder,
+                &t.hdr.depth_view,
+                [t.hdr.width, t.hdr.height],
+                frame_view.view_proj,
+                view.eye,
+            )?;
+        }
         self.timer.mark(&mut encoder, "trees");
         self.resolver.encode(
             gpu,

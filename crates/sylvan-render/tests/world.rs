@@ -120,6 +120,88 @@ fn gpu_cull_draws_what_the_cpu_lists_drew() {
     }
 }
 
+/// The occlusion cull (#15): from a camera low in a dense stand, the second frame tests the
+/// trees against the first frame's depth pyramid and drops the hidden ones — the picture stays
+/// the one drawn without the cull; after a cut (the eye moved far) nothing is dropped. What
+/// occludes is what writes depth: geometry's leaves, not octahedral's blended impostors.
+#[test]
+fn occlusion_cull_drops_hidden_trees_and_changes_no_pixel() {
+    let gpu = gpu();
+    let world = sylvan_scene::World {
+        tile_m: 64.0,
+        ..Default::default()
+    };
+    let mut s = forest_scene(300.0, 400.0, world);
+    s.camera = Camera {
+        position: Vec3::new(20.0, 4.0, 20.0),
+        look_at: Vec3::new(150.0, 6.0, 150.0),
+        fov_deg: 60.0,
+    };
+    for technique in ["geometry", "octahedral"] {
+        let render = |occlusion_cull: bool, frames: usize, cut: bool| {
+            let options = RenderOptions {
+                width: 128,
+                height: 128,
+                shadow_resolution: 512,
+                technique: technique.into(),
+                occlusion_cull,
+                cache: sylvan_render::bake::CachePolicy::Off,
+                ..Default::default()
+            };
+            let mut r = Renderer::new(&gpu, &s, &[test_tree()], &options).expect("renderer");
+            let mut stats = Vec::new();
+            for f in 0..frames {
+                let mut camera = s.camera;
+                if cut && f + 1 == frames {
+                    camera.position.x += 2.0 * sylvan_render::world::OCCLUSION_MAX_MOVE_M;
+                    camera.look_at.x += 2.0 * sylvan_render::world::OCCLUSION_MAX_MOVE_M;
+                }
+                stats.push(r.render(&gpu, &camera, &s.sun).expect("frame"));
+            }
+            let img = image::DynamicImage::ImageRgba8(r.read_image(&gpu).unwrap()).into_rgb8();
+            (img, stats)
+        };
+        let occluded =
+            |st: &sylvan_render::FrameStats| st.technique_stats["world"]["trees_occluded"];
+        let drawn = |st: &sylvan_render::FrameStats| st.trees_drawn.values().sum::<u32>();
+        let (plain, plain_stats) = render(false, 1, false);
+        let (culled, culled_stats) = render(true, 2, false);
+        eprintln!(
+            "{technique}: drawn {} without, {} with the cull ({} occluded)",
+            drawn(&plain_stats[0]),
+            drawn(&culled_stats[1]),
+            occluded(&culled_stats[1])
+        );
+        assert_eq!(
+            occluded(&culled_stats[0]),
+            0.0,
+            "{technique}: no previous frame"
+        );
+        assert_eq!(
+            drawn(&culled_stats[0]),
+            drawn(&plain_stats[0]),
+            "{technique}"
+        );
+        // Geometry's leaves write depth; octahedral's blended impostors do not (only the
+        // terrain occludes them: none here).
+        if technique == "geometry" {
+            assert!(
+                occluded(&culled_stats[1]) as u32 * 4 > drawn(&plain_stats[0]),
+                "{technique}: a quarter of the trees at least are hidden from this eye"
+            );
+        }
+        assert_eq!(
+            drawn(&culled_stats[1]) + occluded(&culled_stats[1]) as u32,
+            drawn(&plain_stats[0]),
+            "{technique}"
+        );
+        let f = sylvan_eval::flip(&plain, &culled).unwrap();
+        assert!(f.mean <= 0.002, "{technique}: FLIP {}", f.mean);
+        let (_, cut_stats) = render(true, 2, true);
+        assert_eq!(occluded(&cut_stats[1]), 0.0, "{technique}: after a cut");
+    }
+}
+
 /// `boxtree`'s GPU traversal writes lists whose sizes only the GPU knows: a first frame that
 /// opens more boxes than its buffers hold grows them and is drawn again, so the picture is
 /// still the CPU traversal's.

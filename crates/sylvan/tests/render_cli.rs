@@ -204,6 +204,20 @@ fn bad_flags_give_one_line_errors() {
         &sylvan(&["bench", scene, "--frames", "0"], &dir),
         &["--frames 0"],
     );
+    assert_one_line_error(
+        &sylvan(
+            &[
+                "render",
+                scene,
+                "--technique",
+                "octahedral",
+                "--occlusion-cull",
+                "--cpu-driven",
+            ],
+            &dir,
+        ),
+        &["--occlusion-cull", "CPU-driven", "drop --cpu-driven"],
+    );
     // Checked against a declared memory limit before allocating (was a bare "Out of Memory").
     assert_one_line_error(
         &sylvan(&["render", scene, "--shadow-res", "16384"], &dir),

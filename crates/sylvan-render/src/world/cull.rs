@@ -149,6 +149,10 @@ struct GpuParams {
     species: [[f32; 4]; MAX_SPECIES],
     /// The caster cull ([`CasterCull::gpu_rows`]; all zero without one: casters kept).
     casters: [[f32; 4]; CasterCull::GPU_ROWS],
+    /// The occlusion cull ([`super::hiz::PyramidUse`]).
+    hiz_view_proj: [[f32; 4]; 4],
+    hiz_info: [f32; 4],
+    hiz_offsets: [[u32; 4]; super::hiz::MAX_LEVELS / 4],
 }
 
 /// What one frame culls.
@@ -169,6 +173,8 @@ pub(crate) struct FrameCull<'a> {
     /// Per (pass, group) list: the most trees it can receive.
     pub capacity: &'a [u32],
     pub draws: &'a [IndirectDraw],
+    /// The previous frame's depth pyramid for the camera pass's occlusion test.
+    pub pyramid: &'a super::hiz::PyramidUse<'a>,
 }
 
 /// The last frame's lists, as the techniques draw them.
@@ -250,8 +256,10 @@ pub(crate) struct Cull {
     listed: Vec<u32>,
     draws_per_pass: usize,
     max_binding: u64,
-    /// The bind group of the buffers above, with the pool generation it binds.
-    bind: Option<(wgpu::BindGroup, u64)>,
+    /// The bind group of the buffers above, with the pool and pyramid generations it binds.
+    bind: Option<(wgpu::BindGroup, (u64, u64))>,
+    /// Trees the camera pass's occlusion test dropped in the frame last read back.
+    occluded: u32,
 }
 
 /// A storage buffer that grows (never shrinks).
@@ -297,7 +305,7 @@ impl Cull {
         list_layout: ListLayout,
         max_binding: u64,
     ) -> Result<Self, RenderError> {
-        let need = 9;
+        let need = 9; // and the depth pyramid's two sampled textures
         let have = gpu.device.limits().max_storage_buffers_per_shader_stage;
         if have < need {
             return Err(RenderError::Option(format!(
@@ -315,6 +323,16 @@ impl Cull {
         use sylvan_gpu::layout;
         let c = wgpu::ShaderStages::COMPUTE;
         let rw = |binding| layout::storage_rw(binding, c);
+        let pyramid = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: c,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        };
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("cull_layout"),
             entries: &[
@@ -327,6 +345,8 @@ impl Cull {
                 layout::storage(6, c),
                 rw(7),
                 rw(8),
+                pyramid(9),
+                pyramid(10),
             ],
         });
         let module = sylvan_gpu::shader(gpu, "cull", include_str!("cull.wgsl"));
@@ -379,14 +399,14 @@ impl Cull {
                 gpu,
                 "cull_counters",
                 wgpu::BufferUsages::COPY_SRC,
-                (n_lists as u64 + 2 * SORT_BUCKETS as u64) * 4,
+                (n_lists as u64 + 2 * SORT_BUCKETS as u64 + 1) * 4,
             ),
             trees: Storage::new(gpu, "cull_lists_trees", wgpu::BufferUsages::VERTEX, 1 << 16),
             draws: Storage::new(gpu, "cull_draws", u, 256),
             args: Storage::new(gpu, "cull_args", wgpu::BufferUsages::INDIRECT, 256),
             readback: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("cull_readback"),
-                size: (n_lists as u64 * 4).next_multiple_of(256),
+                size: (n_lists as u64 * 4 + 4).next_multiple_of(256),
                 usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             }),
@@ -397,6 +417,7 @@ impl Cull {
             draws_per_pass: 0,
             max_binding,
             bind: None,
+            occluded: 0,
         })
     }
 
@@ -432,6 +453,11 @@ impl Cull {
 
     pub fn listed(&self) -> &[u32] {
         &self.listed
+    }
+
+    /// Trees the occlusion test dropped from the camera list in the frame last read back.
+    pub fn occluded(&self) -> u32 {
+        self.occluded
     }
 
     /// Lists per pass.
@@ -476,7 +502,8 @@ impl Cull {
             })
             .collect();
         // The bind group is made again only when a buffer it binds was replaced.
-        let mut stale = self.bind.as_ref().is_none_or(|b| b.1 != f.pool_generation);
+        let generations = (f.pool_generation, f.pyramid.generation);
+        let mut stale = self.bind.as_ref().is_none_or(|b| b.1 != generations);
         stale |= self.trees.reserve(gpu, at as u64 * TREE_BYTES);
         stale |= self
             .pages
@@ -509,6 +536,9 @@ impl Cull {
             casters: f
                 .casters
                 .map_or([[0.0; 4]; CasterCull::GPU_ROWS], CasterCull::gpu_rows),
+            hiz_view_proj: f.pyramid.view_proj.to_cols_array_2d(),
+            hiz_info: f.pyramid.info,
+            hiz_offsets: f.pyramid.offsets,
         };
         for (p, frustum) in f.frustums.iter().enumerate() {
             if let Some(fr) = frustum {
@@ -541,9 +571,11 @@ impl Cull {
                     self.draws.buffer.as_entire_binding(),
                     self.args.buffer.as_entire_binding(),
                     self.parked.buffer.as_entire_binding(),
+                    wgpu::BindingResource::TextureView(f.pyramid.views[0]),
+                    wgpu::BindingResource::TextureView(f.pyramid.views[1]),
                 ],
             );
-            self.bind = Some((bind, f.pool_generation));
+            self.bind = Some((bind, generations));
         }
         let bind = &self.bind.as_ref().expect("made above").0;
         encoder.clear_buffer(&self.counters.buffer, 0, None);
@@ -573,13 +605,15 @@ impl Cull {
         }
         let bytes = (self.readback_len * 4) as u64;
         encoder.copy_buffer_to_buffer(&self.counters.buffer, 0, &self.readback, 0, bytes);
+        let occluded_at = bytes + 2 * SORT_BUCKETS as u64 * 4;
+        encoder.copy_buffer_to_buffer(&self.counters.buffer, occluded_at, &self.readback, bytes, 4);
         Ok(())
     }
 
     /// The lists' counts and capacities of the frame just completed (blocks until mapped:
     /// call once the frame's work is done, as the renderer does after its timer).
     pub fn read_counts(&mut self, gpu: &Gpu) -> Result<Vec<(u32, u32)>, RenderError> {
-        let slice = self.readback.slice(..(self.readback_len * 4) as u64);
+        let slice = self.readback.slice(..(self.readback_len * 4 + 4) as u64);
         let (tx, rx) = std::sync::mpsc::channel();
         slice.map_async(wgpu::MapMode::Read, move |r| {
             let _ = tx.send(r);
@@ -588,12 +622,13 @@ impl Cull {
         rx.recv()
             .map_err(|_| RenderError::Option("cull counts: map callback dropped".into()))?
             .map_err(|e| RenderError::Option(format!("cull counts: {e}")))?;
-        let counts: Vec<u32> = {
+        let mut counts: Vec<u32> = {
             let data = slice
                 .get_mapped_range()
                 .map_err(|e| RenderError::Option(format!("cull counts: {e}")))?;
             bytemuck::cast_slice(&data).to_vec()
         };
+        self.occluded = counts.pop().unwrap_or(0);
         self.readback.unmap();
         for (l, (&n, &cap)) in self
             .listed

@@ -60,6 +60,12 @@ struct Params {
     // The caster cull (frame.rs `CasterCull::gpu_rows`): cascade c's 5 planes at 6c..6c+4 and
     // its shell (x inner, y outer) at 6c+5; at 24 the sun (xyz, zero: no cull) and the reach.
     casters: array<vec4<f32>, 25>,
+    // The occlusion cull (world/hiz.rs): the view-projection of the frame the depth pyramid
+    // holds, and x 1: test on, y levels, zw that frame's size in pixels.
+    hiz_view_proj: mat4x4<f32>,
+    hiz_info: vec4<f32>,
+    // level L's x offset in its texture at [L / 4][L % 4]
+    hiz_offsets: array<vec4<u32>, 4>,
 }
 
 const PASSES: u32 = 5u;
@@ -69,12 +75,24 @@ const BUCKETS: u32 = 4096u;
 @group(0) @binding(1) var<storage, read> pool: array<PoolTree>;
 @group(0) @binding(2) var<storage, read> pages: array<Page>;
 @group(0) @binding(3) var<storage, read> lists: array<List>;
-// [lists' counts | BUCKETS bucket counts | BUCKETS bucket starts]
+// [lists' counts | BUCKETS bucket counts | BUCKETS bucket starts | trees occluded]
 @group(0) @binding(4) var<storage, read_write> counters: array<atomic<u32>>;
 @group(0) @binding(5) var<storage, read_write> out_trees: array<PoolTree>;
 @group(0) @binding(6) var<storage, read> draws: array<Draw>;
 @group(0) @binding(7) var<storage, read_write> args: array<u32>;
 @group(0) @binding(8) var<storage, read_write> parked: array<Parked>;
+// The previous frame's depth pyramid: per texel the farthest depth (reversed Z) under it;
+// even levels in the first texture, odd in the second, side by side (world/hiz.wgsl).
+@group(0) @binding(9) var hiz_even: texture_2d<f32>;
+@group(0) @binding(10) var hiz_odd: texture_2d<f32>;
+
+fn hiz_load(level: u32, t: vec2<i32>) -> f32 {
+    let at = t + vec2<i32>(i32(params.hiz_offsets[level / 4u][level % 4u]), 0);
+    if ((level & 1u) == 0u) {
+        return textureLoad(hiz_even, at, 0).r;
+    }
+    return textureLoad(hiz_odd, at, 0).r;
+}
 
 fn inside(pass_index: u32, c: vec3<f32>, r: f32) -> bool {
     for (var k = 0u; k < 6u; k++) {
@@ -118,6 +136,53 @@ fn caster_keeps(cascade: u32, c: vec3<f32>, r: f32) -> bool {
     let min_distance = length(d - s * nearest);
     let max_distance = max(length(d - s * t0), length(d - s * t1));
     return min_distance <= shell.y + r && max_distance >= shell.x - r;
+}
+
+// Whether the box (c ± r) is hidden behind what the previous frame drew: its nearest depth
+// (reversed Z: the largest) is farther than the farthest depth of the pyramid texels under its
+// screen rectangle, read at the level where that rectangle spans at most 2×2 texels. A box
+// reaching behind the previous eye or outside its view is not hidden.
+fn occluded(c: vec3<f32>, r: f32) -> bool {
+    if (params.hiz_info.x < 0.5) {
+        return false;
+    }
+    var lo = vec2<f32>(1e30);
+    var hi = vec2<f32>(-1e30);
+    var nearest = 0.0;
+    for (var k = 0u; k < 8u; k++) {
+        let s = vec3<f32>(f32(k & 1u), f32((k >> 1u) & 1u), f32(k >> 2u)) * 2.0 - 1.0;
+        let clip = params.hiz_view_proj * vec4<f32>(c + s * r, 1.0);
+        if (clip.w <= 1e-3) {
+            return false;
+        }
+        let ndc = clip.xyz / clip.w;
+        lo = min(lo, ndc.xy);
+        hi = max(hi, ndc.xy);
+        nearest = max(nearest, ndc.z);
+    }
+    if (any(lo < vec2<f32>(-1.0)) || any(hi > vec2<f32>(1.0)) || nearest >= 1.0) {
+        return false;
+    }
+    let size = params.hiz_info.zw;
+    // Pixels (y down) of the rectangle's corners.
+    let p0 = vec2<f32>(lo.x * 0.5 + 0.5, 0.5 - hi.y * 0.5) * size;
+    let p1 = vec2<f32>(hi.x * 0.5 + 0.5, 0.5 - lo.y * 0.5) * size;
+    let extent = max(max(p1.x - p0.x, p1.y - p0.y), 1.0);
+    // A texel of level L covers 2^(L+1) pixels a side.
+    let levels = u32(params.hiz_info.y);
+    let level = min(u32(max(ceil(log2(extent)) - 1.0, 0.0)), levels - 1u);
+    let first = (vec2<u32>(size) + 1u) / 2u;
+    let dims = vec2<i32>(max(first >> vec2<u32>(level), vec2<u32>(1u))) - 1;
+    let texel = f32(2u << level);
+    let t0 = min(vec2<i32>(floor(p0 / texel)), dims);
+    let t1 = min(vec2<i32>(floor(p1 / texel)), dims);
+    var farthest = 1.0;
+    for (var y = t0.y; y <= t1.y; y++) {
+        for (var x = t0.x; x <= t1.x; x++) {
+            farthest = min(farthest, hiz_load(level, vec2<i32>(x, y)));
+        }
+    }
+    return nearest < farthest;
 }
 
 // smoothstep from e0 to e1; with e1 <= e0 a step at e0 (as the CPU's `common::smoothstep`).
@@ -177,6 +242,10 @@ fn cull(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) l
             continue;
         }
         if (!inside(p, c, r)) {
+            continue;
+        }
+        if (p == 0u && occluded(c, r)) {
+            atomicAdd(&counters[list_count() + 2u * BUCKETS], 1u);
             continue;
         }
         if (p > 0u && !caster_keeps(p - 1u, c, r)) {

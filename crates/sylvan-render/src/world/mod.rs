@@ -12,7 +12,9 @@
 //! instances. Deviations and limits:
 //! - the grid is flat (one level): quadtree levels come with coverage tiles (BN12 shader-maps);
 //! - tiles are culled on the CPU (a few hundred per frame), trees on the GPU;
-//! - occlusion culling against a depth pyramid is not done;
+//! - occlusion culling (an option, [`World::set_occlusion`]) tests the camera pass's trees
+//!   against the *previous* frame's depth pyramid (`hiz.rs`): one frame late, not used after a
+//!   cut;
 //! - the pool and the lists are each one storage binding, so at most
 //!   `max_storage_buffer_binding_size / 32` trees (4.2M on a 128 MiB limit) are resident or
 //!   listed at once — a frame needing more lists only what fits and counts the rest
@@ -20,10 +22,12 @@
 
 pub mod cover;
 mod cull;
+mod hiz;
 mod produce;
 mod seed;
 
 pub use cull::{Culled, IndirectDraw, ListLayout, ListRequest, intersect_windows};
+pub use hiz::MAX_MOVE_M as OCCLUSION_MAX_MOVE_M;
 
 use crate::RenderError;
 use crate::frame::{CASCADES, CasterCull, Frustum};
@@ -146,6 +150,8 @@ pub struct WorldStats {
     pub trees_drawn: [u32; PASSES],
     /// Trees that passed the cull but did not fit a list.
     pub trees_dropped: u32,
+    /// Trees in the camera's view dropped by the occlusion test (read back after the frame).
+    pub trees_occluded: u32,
     /// Pool and list bytes on the GPU.
     pub gpu_bytes: u64,
 }
@@ -171,6 +177,7 @@ impl WorldStats {
                 self.trees_drawn[1..].iter().sum::<u32>() as f64,
             ),
             ("trees_dropped", self.trees_dropped as f64),
+            ("trees_occluded", self.trees_occluded as f64),
             ("gpu_bytes", self.gpu_bytes as f64),
         ] {
             m.insert(k.to_string(), v);
@@ -204,6 +211,10 @@ pub struct World {
     requests: Vec<ListRequest>,
     stats: WorldStats,
     budget_bytes: u64,
+    /// With the occlusion cull on: the previous frame's depth pyramid.
+    pyramid: Option<hiz::DepthPyramid>,
+    /// What the culls bind without one.
+    no_pyramid: [wgpu::TextureView; 2],
 }
 
 impl World {
@@ -280,7 +291,42 @@ impl World {
             culls,
             requests: requests.to_vec(),
             stats: WorldStats::default(),
+            pyramid: None,
+            no_pyramid: hiz::placeholder(gpu),
         })
+    }
+
+    /// Turns the camera pass's occlusion cull on or off (off by default): with it, each frame
+    /// after [`World::reduce_depth`] drops the trees hidden behind what that frame drew.
+    pub fn set_occlusion(&mut self, gpu: &Gpu, on: bool) {
+        match (on, &self.pyramid) {
+            (true, None) => self.pyramid = Some(hiz::DepthPyramid::new(gpu)),
+            (false, Some(_)) => self.pyramid = None,
+            _ => {}
+        }
+    }
+
+    /// Whether the occlusion cull is on.
+    pub fn occlusion(&self) -> bool {
+        self.pyramid.is_some()
+    }
+
+    /// With the occlusion cull on: records the reduction of the frame's depth (Sylvan's own
+    /// reversed-Z main target, `size` pixels, drawn from `eye` with `view_proj`) into the
+    /// pyramid the next frame's cull tests against.
+    pub(crate) fn reduce_depth(
+        &mut self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        depth: &wgpu::TextureView,
+        size: [u32; 2],
+        view_proj: glam::Mat4,
+        eye: Vec3,
+    ) -> Result<(), RenderError> {
+        match &mut self.pyramid {
+            Some(p) => p.reduce(gpu, encoder, depth, size, view_proj, eye),
+            None => Ok(()),
+        }
     }
 
     /// Last frame's statistics.
@@ -306,6 +352,7 @@ impl World {
     pub fn bytes(&self) -> u64 {
         self.pool.size()
             + self.culls.iter().map(cull::Cull::bytes).sum::<u64>()
+            + self.pyramid.as_ref().map_or(0, hiz::DepthPyramid::bytes)
             + self.seeds.as_ref().map_or(0, seed::GpuSeeds::bytes)
     }
 
@@ -478,6 +525,10 @@ impl World {
             let far = (r.max - r.min).length() + near;
             seen.push((r, mask, near, far));
         }
+        let pyramid = match &self.pyramid {
+            Some(p) => p.for_frame(view.eye),
+            None => hiz::PyramidUse::none([&self.no_pyramid[0], &self.no_pyramid[1]]),
+        };
         for (request, cull) in self.requests.iter().zip(&mut self.culls) {
             let [w0, _, _, w3] = request.window;
             let groups = cull.groups();
@@ -518,6 +569,7 @@ impl World {
                     pool_generation: self.pool_pages as u64,
                     capacity: &capacity,
                     draws: &request.draws,
+                    pyramid: &pyramid,
                 },
             )?;
         }
@@ -534,6 +586,7 @@ impl World {
     pub(crate) fn finish_frame(&mut self, gpu: &Gpu) -> Result<(), RenderError> {
         self.stats.trees_drawn = [0; PASSES];
         self.stats.trees_dropped = 0;
+        self.stats.trees_occluded = 0;
         for cull in &mut self.culls {
             let groups = cull.groups();
             let counts = cull.read_counts(gpu)?;
@@ -541,6 +594,7 @@ impl World {
                 self.stats.trees_drawn[i / groups] += n.min(cap);
                 self.stats.trees_dropped += n.saturating_sub(cap);
             }
+            self.stats.trees_occluded += cull.occluded();
         }
         Ok(())
     }

@@ -62,6 +62,12 @@ pub struct ViewArgs {
     /// (the GPU on a hardware adapter, the CPU on a software rasteriser). The trees are the same.
     #[arg(long, value_name = "auto|gpu|cpu", default_value = "auto", value_parser = parse_seeds)]
     pub seeds: sylvan_render::Seeds,
+    /// Cull the camera's trees against the previous frame's depth pyramid (GPU-driven
+    /// techniques; one frame late, so a tree uncovered by the camera's move may be missing for
+    /// a frame; `render` draws its first frame twice, so that the picture shows what the cull
+    /// keeps).
+    #[arg(long)]
+    pub occlusion_cull: bool,
     #[command(flatten)]
     pub bake: BakeArgs,
 }
@@ -267,6 +273,7 @@ impl ViewArgs {
             cpu_driven: self.cpu_driven,
             caster_cull: !self.no_caster_cull,
             seeds: self.seeds,
+            occlusion_cull: self.occlusion_cull,
             ..Default::default()
         };
         options.factor()?;

@@ -125,6 +125,11 @@ pub fn run(args: RenderArgs) -> Result<()> {
             Some(p) => p.sample(path_time(i, args.frames, p.duration())),
             None => r.camera,
         };
+        if i == 0 && r.options.occlusion_cull {
+            // The occlusion cull tests against the previous frame: draw one first, so the
+            // picture shows what the cull keeps.
+            renderer.render(&gpu, &camera, &r.sun)?;
+        }
         let s = renderer.render(&gpu, &camera, &r.sun)?;
         let out = if camera_path.is_some() {
             numbered(&args.out, i)
