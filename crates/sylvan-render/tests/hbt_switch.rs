@@ -530,3 +530,77 @@ fn meshes_branch_by_branch(gpu: &sylvan_gpu::Gpu, plant: &sylvan_plant::Plant) {
         );
     }
 }
+
+/// #15 "level choices that hold on any plant": an imported mesh has no main branches (its
+/// level below is its rest alone), so the presets' branch threshold would open it into its
+/// meshes as soon as it covers a few pixels. Its switch is measured at bake time instead —
+/// the billboard's coverage error grows with the projected size, the one-sample meshes' falls
+/// — and the tree opens into its meshes where they cross, and not before.
+#[test]
+fn a_plant_without_main_branches_opens_into_its_meshes_where_they_were_measured_closer() {
+    let gpu = gpu();
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../sylvan-plant/tests/data/sapling.obj");
+    let plant = sylvan_plant::load(&path).expect("sapling");
+    let p = HbtParams {
+        levels: 3,
+        ..params()
+    };
+    let baked: HbtBaked = HbtBake::bake(&gpu, &plant, &p.bake(), &mut |_, _| {}).expect("bake");
+    assert!(
+        baked
+            .objects
+            .iter()
+            .all(|o| o.object == hbt::bake::REST_OBJECT),
+        "an OBJ has no main branches"
+    );
+    let curve = baked.switch_curve();
+    let (bb, mesh) = (&curve.billboard, &curve.meshes);
+    eprintln!("billboard {bb:?}\nmeshes    {mesh:?}");
+    assert!(
+        bb[bb.len() - 1] > 2.0 * bb[0],
+        "a magnified billboard drifts away"
+    );
+    assert!(
+        mesh[mesh.len() - 1] < 0.5 * mesh[0],
+        "meshes converge as they grow"
+    );
+    let crossing = curve.crossing_texel_pixels();
+    assert!((0.5..=8.0).contains(&crossing), "{crossing}");
+    // One tree where its texel covers the crossing × 0.6 (billboard) and × 1.4 (meshes), past
+    // the cross-fade band (0.3) either way; and the presets' thresholds at × 0.6.
+    let meshed = |pixels: f32, q: &HbtParams| {
+        let (size, fov) = (160u32, 40.0f32);
+        let ppm = size as f32 / (2.0 * (fov.to_radians() / 2.0).tan());
+        let height = 16.0;
+        let texel_m = baked.tree_texel() * height / plant.bbox_max[1];
+        let scene = one_tree_scene(height, texel_m * ppm / pixels, fov);
+        let options = sylvan_render::RenderOptions {
+            width: size,
+            height: size,
+            technique: "hbt".into(),
+            settings: q.settings(),
+            cache: CachePolicy::Off,
+            ..Default::default()
+        };
+        let (_, mut r) =
+            common::render_with_options(&gpu, &scene, std::slice::from_ref(&plant), &options);
+        let stats = r.render(&gpu, &scene.camera, &scene.sun).expect("frame");
+        stats.technique_stats["hbt"]["trees_meshed"]
+    };
+    assert_eq!(
+        meshed(crossing * 0.6, &p),
+        0.0,
+        "a billboard below the crossing"
+    );
+    assert_eq!(meshed(crossing * 1.4, &p), 1.0, "meshes above it");
+    let presets = HbtParams {
+        measured_switch: false,
+        ..p.clone()
+    };
+    assert_eq!(
+        meshed(crossing * 0.6, &presets),
+        1.0,
+        "the presets' thresholds open it into meshes there"
+    );
+}

@@ -42,6 +42,18 @@ pub struct BakeRequest {
     pub wood: Vec<Range<u32>>,
 }
 
+impl BakeRequest {
+    /// All of `plant` (every leaf and wood index) in `frame`, seen from `+f`.
+    pub fn whole(plant: &Plant, frame: PlaneFrame) -> Self {
+        Self {
+            frame,
+            side: 1.0,
+            leaves: std::iter::once(0..plant.leaves.indices.len() as u32).collect(),
+            wood: std::iter::once(0..plant.wood.indices.len() as u32).collect(),
+        }
+    }
+}
+
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct GpuBakeView {

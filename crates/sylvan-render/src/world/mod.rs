@@ -297,7 +297,7 @@ impl World {
     }
 
     /// Turns the camera pass's occlusion cull on or off (off by default): with it, each frame
-    /// after [`World::reduce_depth`] drops the trees hidden behind what that frame drew.
+    /// after its depth was reduced (`reduce_depth`, called by the renderer) drops the trees hidden behind what that frame drew.
     pub fn set_occlusion(&mut self, gpu: &Gpu, on: bool) {
         match (on, &self.pyramid) {
             (true, None) => self.pyramid = Some(hiz::DepthPyramid::new(gpu)),

@@ -13,6 +13,7 @@ mod asset;
 mod branches;
 mod btf;
 mod cubes;
+pub mod switch;
 
 pub use asset::{
     FORMAT_VERSION, HbtBaked, MAX_CUBE_RESOLUTION, Mips, ObjectBtf, Placement, REST_OBJECT,
@@ -88,6 +89,10 @@ impl crate::bake::Bake for HbtBake {
         put("lights", b.lights().into());
         put("branch_objects", b.objects.len().into());
         put("branch_placements", b.placements.len().into());
+        put(
+            "mesh_switch_texel_px",
+            (b.switch_curve().crossing_texel_pixels() as f64).into(),
+        );
         put("small_objects", b.small.objects.len().into());
         put("small_placements", b.small.placements.len().into());
         put("tree_bytes", tree_bytes.into());
@@ -244,6 +249,10 @@ impl crate::bake::Bake for HbtBake {
             .map_err(option)?;
             progress(total, total);
         }
+        // Where, at this tile size, the meshes get closer to the reference than the billboard
+        // (#15: the mesh switch of a plant without main branches, measured, not assumed).
+        let (lo, hi) = (Vec3::from(plant.bbox_min), Vec3::from(plant.bbox_max));
+        let curve = switch::measure(gpu, plant, p.tile, |d| view_frame(d, lo, hi, p.tile))?;
         Ok(HbtBaked {
             tile: p.tile,
             view_level: p.view_level,
@@ -264,6 +273,7 @@ impl crate::bake::Bake for HbtBake {
                 placements: small_placements,
                 cubes: small_cubes,
             },
+            coverage_error: [curve.billboard, curve.meshes],
         })
     }
 }

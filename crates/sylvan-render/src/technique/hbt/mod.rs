@@ -76,6 +76,15 @@
 //!   than the meshes (ꟻLIP 0.094 with the BTF levels only, 0.044 with meshes; BENCHMARKS.md).
 //!   With the pine the branch level is then drawn only within the cross-fades (the prunus,
 //!   whose branches are smaller against the tree, keeps a band of its own).
+//! - **A plant without main branches opens into its meshes where measured.** MNP01 opens
+//!   levels where the billboard would be magnified; a plant whose level below is its rest
+//!   alone (an imported mesh: no L-system branches) has nothing between its tree billboard and
+//!   its meshes, and the presets' branch threshold, applied to a rest as large as the tree,
+//!   meshed every tree of an imported broadleaf. The bake measures ([`bake::switch`]) how far
+//!   the billboard and one-sample meshes each are from a 4×4-sampled rasterisation in coverage
+//!   at 16–256 px, and the meshes open where they become closer
+//!   ([`HbtDrawParams::measured_switch`], default on; plants with main branches keep the
+//!   thresholds measured on the presets).
 //! - **A tree opens into its meshes as a whole by default.** Branch by branch
 //!   ([`HbtDrawParams::mesh_per_branch`], `--set hbt.mesh_per_branch=true`) is built: each triangle of the
 //!   plant's own meshes is given to the root instance whose expansion has a triangle with the
@@ -420,6 +429,13 @@ pub struct HbtDrawParams {
     /// meshes or BTF"); off, the tree opens into its meshes as a whole, by its largest main
     /// branch's texel.
     pub mesh_per_branch: bool,
+    /// (`levels` = 3) a plant without main branches — its level below is its rest alone, as an
+    /// imported mesh's is, or none — opens straight into its meshes where, measured at bake
+    /// time ([`bake::switch`]), one-sample meshes get closer to the reference than its
+    /// billboard (`sylvan bake --technique hbt --json`: `mesh_switch_texel_px`); off, it opens
+    /// into its rest at [`HbtDrawParams::open_texel_pixels`] and its meshes at
+    /// [`HbtDrawParams::mesh_texel_pixels`] of the rest's texel, thresholds tuned on the presets.
+    pub measured_switch: bool,
     /// The cross-fade band around those switches, relative (0 = hard switch).
     pub band: f32,
     /// Received sun shadows from cube-maps or cascades.
@@ -449,6 +465,9 @@ impl Default for HbtDrawParams {
             // Measured on the default view at 1280×720: branch by branch 1.2× slower at the
             // same ꟻLIP (more branch BTF fill and draws; BENCHMARKS.md).
             mesh_per_branch: false,
+            // Measured: an imported 205k-triangle chestnut (no main branches) drew every tree
+            // of broadleaf.toml as meshes with the presets' thresholds (BENCHMARKS.md).
+            measured_switch: true,
             band: 0.3,
             // Measured: MNP01's 8-corner interpolation under-darkens a tree in another's shadow
             // (0.080 vs the reference's 0.289 on the test grove; cascades 0.301), see BENCHMARKS.md.
@@ -481,6 +500,11 @@ impl ParamTable for HbtDrawParams {
             key: "mesh_per_branch",
             unit: "",
             doc: "(levels 3) open an opened tree into its meshes branch by branch instead of as a whole",
+        },
+        ParamDoc {
+            key: "measured_switch",
+            unit: "",
+            doc: "(levels 3) a plant without main branches opens into its meshes where they get closer to the reference than its billboard, measured at bake time",
         },
         ParamDoc {
             key: "band",

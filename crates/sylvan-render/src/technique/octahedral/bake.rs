@@ -129,17 +129,10 @@ impl crate::bake::Bake for OctahedralBake {
         p: &OctahedralBakeParams,
         progress: &mut dyn FnMut(usize, usize),
     ) -> Result<OctahedralBaked, RenderError> {
-        // The whole plant: one index range of each mesh.
-        let leaves: Vec<std::ops::Range<u32>> =
-            std::iter::once(0..plant.leaves.indices.len() as u32).collect();
-        let wood: Vec<std::ops::Range<u32>> =
-            std::iter::once(0..plant.wood.indices.len() as u32).collect();
         let requests: Vec<BakeRequest> = (0..p.grid * p.grid)
-            .map(|k| BakeRequest {
-                frame: view_frame(plant, grid_direction(p.grid, k % p.grid, k / p.grid)),
-                side: 1.0,
-                leaves: leaves.clone(),
-                wood: wood.clone(),
+            .map(|k| {
+                let d = grid_direction(p.grid, k % p.grid, k / p.grid);
+                BakeRequest::whole(plant, view_frame(plant, d))
             })
             .collect();
         let frame = requests[0].frame;

@@ -112,11 +112,6 @@ impl crate::bake::Bake for ZFieldBake {
     ) -> Result<ZFieldBaked, RenderError> {
         p.validate().map_err(RenderError::Option)?;
         let grid = HemiGrid::new(p.order).expect("validated");
-        // The whole plant: one index range of each mesh.
-        let leaves: Vec<std::ops::Range<u32>> =
-            std::iter::once(0..plant.leaves.indices.len() as u32).collect();
-        let wood: Vec<std::ops::Range<u32>> =
-            std::iter::once(0..plant.wood.indices.len() as u32).collect();
         let frames: Vec<PlaneFrame> = grid
             .directions()
             .into_iter()
@@ -129,10 +124,8 @@ impl crate::bake::Bake for ZFieldBake {
                     .iter()
                     .map(move |f| (f, side))
                     .map(|(f, side)| BakeRequest {
-                        frame: *f,
                         side,
-                        leaves: leaves.clone(),
-                        wood: wood.clone(),
+                        ..BakeRequest::whole(plant, *f)
                     })
             })
             .collect();

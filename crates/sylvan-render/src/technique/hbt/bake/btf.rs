@@ -214,12 +214,7 @@ pub(super) fn bake_btf(
     progress: &mut dyn FnMut(usize),
 ) -> Result<(Vec<Mips>, Vec<Mips>), RenderError> {
     let (min, max) = (Vec3::from(plant.bbox_min), Vec3::from(plant.bbox_max));
-    let whole = |frame: PlaneFrame| BakeRequest {
-        frame,
-        side: 1.0,
-        leaves: std::iter::once(0..plant.leaves.indices.len() as u32).collect(),
-        wood: std::iter::once(0..plant.wood.indices.len() as u32).collect(),
-    };
+    let whole = |frame: PlaneFrame| BakeRequest::whole(plant, frame);
     let (nv, nl) = (views.len(), lights.len());
     let view_frames: Vec<PlaneFrame> = views
         .directions()

@@ -130,7 +130,8 @@ pub(super) struct PlantDraw {
     pub(super) mesh_texel: f32,
     /// The pixels per `mesh_texel` at which the meshes open: `mesh_texel_pixels`, or without a
     /// level below `open_texel_pixels` (the tree level is replaced where it would be magnified;
-    /// the branches' earlier switch has no meaning for it).
+    /// the branches' earlier switch has no meaning for it); for a plant without main branches
+    /// (with [`HbtDrawParams::measured_switch`]) the crossing measured at bake time.
     pub(super) mesh_pixels: f32,
     /// The plant's own meshes (MNP01 §4's polygonal bottom level; with `levels` = 3), indices
     /// grouped by placement when `parts` is not empty.
@@ -273,7 +274,22 @@ impl Hbt {
                     });
                 }
             }
-            let (texel, mesh_texel) = (b.tree_texel(), b.mesh_texel());
+            // A plant without main branches (its level below is its rest alone: an imported
+            // mesh) has nothing between its tree billboard and its meshes; they open where
+            // they were measured to get closer to the reference than the billboard (#15).
+            let rest_only = b.objects.iter().all(|o| o.object == hb::REST_OBJECT);
+            let measured = params.measured_switch && rest_only && params.levels >= 3;
+            if measured {
+                placements.clear();
+            }
+            let (texel, mesh_texel) = match measured {
+                true => (b.tree_texel(), b.tree_texel()),
+                false => (b.tree_texel(), b.mesh_texel()),
+            };
+            let mesh_pixels = match measured {
+                true => b.switch_curve().crossing_texel_pixels(),
+                false => select::mesh_pixels(params, !placements.is_empty()),
+            };
             // Branch by branch: the plant's meshes with each placement's triangles together.
             let split = match &mesh_pipes {
                 Some(_) if params.mesh_per_branch && !placements.is_empty() => {
@@ -312,7 +328,7 @@ impl Hbt {
                 radius: (max - min).length() * 0.5,
                 texel,
                 mesh_texel,
-                mesh_pixels: select::mesh_pixels(params, !placements.is_empty()),
+                mesh_pixels,
                 meshes,
                 parts: split.map_or_else(Vec::new, |s| s.parts),
                 placements,
