@@ -297,7 +297,8 @@ impl World {
     }
 
     /// Turns the camera pass's occlusion cull on or off (off by default): with it, each frame
-    /// after its depth was reduced (`reduce_depth`, called by the renderer) drops the trees hidden behind what that frame drew.
+    /// drops the trees hidden behind what the previous frame drew (its depth reduced by
+    /// `reduce_depth`, which the renderer calls).
     pub fn set_occlusion(&mut self, gpu: &Gpu, on: bool) {
         match (on, &self.pyramid) {
             (true, None) => self.pyramid = Some(hiz::DepthPyramid::new(gpu)),
