@@ -250,7 +250,8 @@ impl crate::bake::Bake for HbtBake {
             progress(total, total);
         }
         // Where, at this tile size, the meshes get closer to the reference than the billboard
-        // (#15: the mesh switch of a plant without main branches, measured, not assumed).
+        // (#15: the mesh switch of a plant without main branches, measured in ꟻLIP, not
+        // assumed).
         let (lo, hi) = (Vec3::from(plant.bbox_min), Vec3::from(plant.bbox_max));
         let curve = switch::measure(gpu, plant, p.tile, |d| view_frame(d, lo, hi, p.tile))?;
         Ok(HbtBaked {
@@ -273,7 +274,7 @@ impl crate::bake::Bake for HbtBake {
                 placements: small_placements,
                 cubes: small_cubes,
             },
-            coverage_error: [curve.billboard, curve.meshes],
+            switch_error: [curve.billboard, curve.meshes],
         })
     }
 }

@@ -81,8 +81,8 @@
 //!   alone (an imported mesh: no L-system branches) has nothing between its tree billboard and
 //!   its meshes, and the presets' branch threshold, applied to a rest as large as the tree,
 //!   meshed every tree of an imported broadleaf. The bake measures ([`bake::switch`]) how far
-//!   the billboard and one-sample meshes each are from a 4×4-sampled rasterisation in coverage
-//!   at 16–256 px, and the meshes open where they become closer
+//!   the billboard and one-sample meshes each are from a 4×4-sampled rasterisation in ꟻLIP
+//!   (albedo over a dark ground) at 16–256 px, and the meshes open where they become closer
 //!   ([`HbtDrawParams::measured_switch`], default on; plants with main branches keep the
 //!   thresholds measured on the presets).
 //! - **A tree opens into its meshes as a whole by default.** Branch by branch

@@ -7,7 +7,7 @@ use crate::technique::hbt::visibility;
 use glam::{Affine3A, Vec3};
 
 /// Bumped whenever the payload below or the lighting baked into it changes.
-pub const FORMAT_VERSION: u32 = 5;
+pub const FORMAT_VERSION: u32 = 6;
 /// Largest visibility cube-map face side accepted.
 pub const MAX_CUBE_RESOLUTION: u32 = 64;
 
@@ -118,10 +118,10 @@ pub struct HbtBaked {
     /// The small-branch level below the main branches (empty unless baked with
     /// [`crate::technique::hbt::HbtBakeParams::small_branches`]).
     pub small: SmallLevel,
-    /// The tree billboard's and the one-sample meshes' coverage error against the reference
-    /// at each of [`super::switch::SIZES`] ([`super::switch::measure`]): where the meshes
-    /// open on a plant without main branches.
-    pub coverage_error: [Vec<f32>; 2],
+    /// The tree billboard's and the one-sample meshes' ꟻLIP against the reference at each of
+    /// [`super::switch::SIZES`] ([`super::switch::measure`]): where the meshes open on a plant
+    /// without main branches.
+    pub switch_error: [Vec<f32>; 2],
 }
 
 impl HbtBaked {
@@ -130,12 +130,12 @@ impl HbtBaked {
         crate::directions::SAMPLE_COUNTS[self.view_level as usize]
     }
 
-    /// The measured mesh switch ([`HbtBaked::coverage_error`]) as a curve.
+    /// The measured mesh switch ([`HbtBaked::switch_error`]) as a curve.
     pub fn switch_curve(&self) -> super::switch::SwitchCurve {
         super::switch::SwitchCurve {
             sizes: super::switch::SIZES.to_vec(),
-            billboard: self.coverage_error[0].clone(),
-            meshes: self.coverage_error[1].clone(),
+            billboard: self.switch_error[0].clone(),
+            meshes: self.switch_error[1].clone(),
             tile: self.tile,
         }
     }
@@ -385,8 +385,8 @@ impl crate::bake::codec::Codec for HbtBaked {
         let s = &self.small;
         encode_level(&mut e, &s.objects, &s.placements, &s.cubes);
         e.u32s(s.ranges.as_flattened());
-        e.f32s(&self.coverage_error[0]);
-        e.f32s(&self.coverage_error[1]);
+        e.f32s(&self.switch_error[0]);
+        e.f32s(&self.switch_error[1]);
         e.buf
     }
 
@@ -460,16 +460,16 @@ impl crate::bake::codec::Codec for HbtBaked {
             placements: splacements,
             cubes: scubes,
         };
-        let coverage_error = [d.f32s()?, d.f32s()?];
+        let switch_error = [d.f32s()?, d.f32s()?];
         let n = super::switch::SIZES.len();
-        if coverage_error
+        if switch_error
             .iter()
             .any(|c| c.len() != n || c.iter().any(|x| !(x.is_finite() && *x >= 0.0)))
         {
             return Err(bad(format!(
-                "coverage errors: {} and {} values, {n} finite ones each expected",
-                coverage_error[0].len(),
-                coverage_error[1].len()
+                "switch errors: {} and {} values, {n} finite ones each expected",
+                switch_error[0].len(),
+                switch_error[1].len()
             )));
         }
         d.finish()?;
@@ -488,7 +488,7 @@ impl crate::bake::codec::Codec for HbtBaked {
             cube_resolution,
             cubes,
             small,
-            coverage_error,
+            switch_error,
         })
     }
 }
@@ -530,7 +530,7 @@ mod tests {
             cube_resolution: 2,
             cubes: vec![7; 8 * 6 * 4],
             small: SmallLevel::default(),
-            coverage_error: [vec![0.1; super::super::switch::SIZES.len()], vec![0.2; 9]],
+            switch_error: [vec![0.1; super::super::switch::SIZES.len()], vec![0.2; 9]],
         };
         let object = |o: u32| ObjectBtf {
             object: o,

@@ -1,14 +1,14 @@
 //! The mesh switch measured per plant (#15 "level choices that hold on any plant"): at bake
 //! time, how far the plant's billboard and its meshes each are from the reference at a set of
-//! projected sizes, and so where the meshes start to be closer. The reference is the plant
-//! rasterised with 4×4 samples per pixel; the meshes as drawn are one sample per pixel; the
-//! billboard is the `tile`-texel image (4×4 samples per texel) resampled to the size. The
-//! distance is in coverage — where each puts the plant and where it leaves holes, which is
-//! what a billboard gets wrong as it is magnified and what one-sample meshes get wrong as they
-//! shrink (shading is the BTF's own and is not measured here).
+//! projected sizes — in ꟻLIP, the fidelity metric of the whole project — and so where the
+//! meshes start to be closer. The reference is the plant rasterised with 4×4 samples per
+//! pixel; the meshes as drawn are one sample per pixel; the billboard is the `tile`-texel
+//! image (4×4 samples per texel) resampled to the size (a magnified texel interpolated, a
+//! minified one averaged). Each is the plant's premultiplied albedo over a dark ground
+//! ([`GROUND`]): silhouettes, holes and the blur of a magnified billboard all count; shading
+//! is the BTF's own and is not part of this comparison.
 
 use crate::RenderError;
-use crate::bake::image::TileImage;
 use crate::bake::{BakeRequest, PlantBaker};
 use glam::Vec3;
 use sylvan_gpu::Gpu;
@@ -26,14 +26,17 @@ const VIEWS: [[f32; 3]; 4] = [
     [0.3, 0.9, -0.3],
 ];
 
-/// Coverage error against the reference per measured size, mean over the views.
+/// Linear albedo of what the plant is composited over (a dark ground).
+pub const GROUND: f32 = 0.2;
+
+/// ꟻLIP against the reference per measured size, mean over the views.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SwitchCurve {
     /// The sizes (pixels across the frame).
     pub sizes: Vec<u32>,
-    /// The billboard's error per size (sum of |α − α_ref| over the reference's coverage).
+    /// The billboard's mean ꟻLIP per size.
     pub billboard: Vec<f32>,
-    /// The one-sample meshes' error per size.
+    /// The one-sample meshes' mean ꟻLIP per size.
     pub meshes: Vec<f32>,
     /// Texels across the billboard's frame.
     pub tile: u32,
@@ -75,28 +78,22 @@ pub fn measure(
         .iter()
         .map(|&d| BakeRequest::whole(plant, frame(Vec3::from(d).normalize())))
         .collect();
-    let alpha = |img: &TileImage| img.color.iter().map(|c| c[3]).collect::<Vec<f32>>();
-    let billboards: Vec<Vec<f32>> = PlantBaker::new(gpu, plant, tile, 4)?
-        .bake(gpu, &requests, |_| {})?
-        .iter()
-        .map(alpha)
-        .collect();
+    let billboards = PlantBaker::new(gpu, plant, tile, 4)?.bake(gpu, &requests, |_| {})?;
+    let flip = |a: &image::RgbImage, b: &image::RgbImage| {
+        sylvan_eval::flip(a, b)
+            .map(|f| f.mean)
+            .map_err(|e| RenderError::Option(format!("measuring the mesh switch: {e}")))
+    };
     let (mut bb, mut mesh) = (Vec::new(), Vec::new());
     for &size in &SIZES {
         let reference = PlantBaker::new(gpu, plant, size, 4)?.bake(gpu, &requests, |_| {})?;
         let one = PlantBaker::new(gpu, plant, size, 1)?.bake(gpu, &requests, |_| {})?;
         let (mut eb, mut em) = (0.0, 0.0);
         for ((r, o), b) in reference.iter().zip(&one).zip(&billboards) {
-            let r = alpha(r);
-            let total: f32 = r.iter().sum::<f32>().max(1e-6);
-            let b = resample(b, tile, size);
-            eb += r.iter().zip(&b).map(|(x, y)| (x - y).abs()).sum::<f32>() / total;
-            em += r
-                .iter()
-                .zip(alpha(o))
-                .map(|(x, y)| (x - y).abs())
-                .sum::<f32>()
-                / total;
+            let r = over_ground(&r.color, size);
+            let b = over_ground(&resample(&b.color, tile, size), size);
+            eb += flip(&r, &b)?;
+            em += flip(&r, &over_ground(&o.color, size))?;
         }
         bb.push(eb / VIEWS.len() as f32);
         mesh.push(em / VIEWS.len() as f32);
@@ -109,14 +106,33 @@ pub fn measure(
     })
 }
 
-/// `src` (`n`²) drawn at `m`² as a textured quad is: 4×4 bilinear taps per output pixel (a
-/// magnified texel is interpolated, a minified one averaged, as the mip chain would).
-fn resample(src: &[f32], n: u32, m: u32) -> Vec<f32> {
+/// Premultiplied linear RGBA (`n`², row 0 at the top) over [`GROUND`], sRGB-encoded.
+fn over_ground(px: &[[f32; 4]], n: u32) -> image::RgbImage {
+    let encode = |c: f32| {
+        let c = c.clamp(0.0, 1.0);
+        let s = if c <= 0.003_130_8 {
+            c * 12.92
+        } else {
+            1.055 * c.powf(1.0 / 2.4) - 0.055
+        };
+        (s * 255.0).round() as u8
+    };
+    let bytes = px
+        .iter()
+        .flat_map(|c| [0, 1, 2].map(|k| encode(c[k] + GROUND * (1.0 - c[3]))))
+        .collect();
+    image::RgbImage::from_raw(n, n, bytes).expect("n² pixels")
+}
+
+/// `src` (`n`², premultiplied) drawn at `m`² as a textured quad is: 4×4 bilinear taps per
+/// output pixel (a magnified texel is interpolated, a minified one averaged, as the mip chain
+/// would).
+fn resample(src: &[[f32; 4]], n: u32, m: u32) -> Vec<[f32; 4]> {
     let (n, m) = (n as usize, m as usize);
     let at = |x: isize, y: isize| {
         let x = x.clamp(0, n as isize - 1) as usize;
         let y = y.clamp(0, n as isize - 1) as usize;
-        src[y * n + x]
+        glam::Vec4::from(src[y * n + x])
     };
     let bilinear = |u: f32, v: f32| {
         let (x, y) = (u * n as f32 - 0.5, v * n as f32 - 0.5);
@@ -128,18 +144,18 @@ fn resample(src: &[f32], n: u32, m: u32) -> Vec<f32> {
         top * (1.0 - fy) + bottom * fy
     };
     let taps = 4;
-    let mut out = vec![0.0; m * m];
-    for (i, o) in out.iter_mut().enumerate() {
-        let (px, py) = ((i % m) as f32, (i / m) as f32);
-        let mut sum = 0.0;
-        for k in 0..taps * taps {
-            let u = (px + ((k % taps) as f32 + 0.5) / taps as f32) / m as f32;
-            let v = (py + ((k / taps) as f32 + 0.5) / taps as f32) / m as f32;
-            sum += bilinear(u, v);
-        }
-        *o = sum / (taps * taps) as f32;
-    }
-    out
+    (0..m * m)
+        .map(|i| {
+            let (px, py) = ((i % m) as f32, (i / m) as f32);
+            let mut sum = glam::Vec4::ZERO;
+            for k in 0..taps * taps {
+                let u = (px + ((k % taps) as f32 + 0.5) / taps as f32) / m as f32;
+                let v = (py + ((k / taps) as f32 + 0.5) / taps as f32) / m as f32;
+                sum += bilinear(u, v);
+            }
+            (sum / (taps * taps) as f32).to_array()
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -148,19 +164,30 @@ mod tests {
 
     #[test]
     fn resampling_keeps_a_constant_and_a_step_average() {
-        let flat = vec![0.5; 16];
+        let flat = vec![[0.5; 4]; 16];
         for m in [2, 4, 8, 16] {
             assert!(
                 resample(&flat, 4, m)
                     .iter()
-                    .all(|&x| (x - 0.5).abs() < 1e-6)
+                    .all(|x| x.iter().all(|&c| (c - 0.5).abs() < 1e-6))
             );
         }
-        let step: Vec<f32> = (0..64).map(|i| if i % 8 < 4 { 1.0 } else { 0.0 }).collect();
-        let mean = |v: &[f32]| v.iter().sum::<f32>() / v.len() as f32;
+        let step: Vec<[f32; 4]> = (0..64)
+            .map(|i| [if i % 8 < 4 { 1.0 } else { 0.0 }; 4])
+            .collect();
+        let mean = |v: &[[f32; 4]]| v.iter().map(|c| c[3]).sum::<f32>() / v.len() as f32;
         for m in [4, 8, 16, 32] {
             assert!((mean(&resample(&step, 8, m)) - 0.5).abs() < 0.02, "{m}");
         }
+    }
+
+    #[test]
+    fn the_ground_shows_where_nothing_covers() {
+        let red = over_ground(&[[1.0, 0.0, 0.0, 1.0]], 1);
+        assert_eq!(red.as_raw(), &[255, 0, 0]);
+        // 0.2 linear is sRGB 124.
+        let empty = over_ground(&[[0.0; 4]; 4], 2);
+        assert!(empty.as_raw().iter().all(|&c| c == 124));
     }
 
     #[test]
