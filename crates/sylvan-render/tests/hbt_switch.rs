@@ -554,7 +554,9 @@ fn a_plant_without_main_branches_opens_into_its_meshes_where_they_were_measured_
             .all(|o| o.object == hbt::bake::REST_OBJECT),
         "an OBJ has no main branches"
     );
-    let curve = baked.switch_curve();
+    let curve = baked
+        .switch_curve()
+        .expect("measured for a plant without main branches");
     let (bb, mesh) = (&curve.billboard, &curve.meshes);
     eprintln!("billboard {bb:?}\nmeshes    {mesh:?}");
     assert!(

@@ -89,10 +89,12 @@ impl crate::bake::Bake for HbtBake {
         put("lights", b.lights().into());
         put("branch_objects", b.objects.len().into());
         put("branch_placements", b.placements.len().into());
-        put(
-            "mesh_switch_texel_px",
-            (b.switch_curve().crossing_texel_pixels() as f64).into(),
-        );
+        if let Some(c) = b.switch_curve() {
+            put(
+                "mesh_switch_texel_px",
+                (c.crossing_texel_pixels() as f64).into(),
+            );
+        }
         put("small_objects", b.small.objects.len().into());
         put("small_placements", b.small.placements.len().into());
         put("tree_bytes", tree_bytes.into());
@@ -252,8 +254,15 @@ impl crate::bake::Bake for HbtBake {
         // Where, at this tile size, the meshes get closer to the reference than the billboard
         // (#15: the mesh switch of a plant without main branches, measured in ꟻLIP, not
         // assumed).
+        // Only a plant without main branches uses it (2–5 s a plant).
         let (lo, hi) = (Vec3::from(plant.bbox_min), Vec3::from(plant.bbox_max));
-        let curve = switch::measure(gpu, plant, p.tile, |d| view_frame(d, lo, hi, p.tile))?;
+        let switch_error = match objects.iter().all(|o| o.object == REST_OBJECT) {
+            true => {
+                let c = switch::measure(gpu, plant, p.tile, |d| view_frame(d, lo, hi, p.tile))?;
+                [c.billboard, c.meshes]
+            }
+            false => [Vec::new(), Vec::new()],
+        };
         Ok(HbtBaked {
             tile: p.tile,
             view_level: p.view_level,
@@ -274,7 +283,7 @@ impl crate::bake::Bake for HbtBake {
                 placements: small_placements,
                 cubes: small_cubes,
             },
-            switch_error: [curve.billboard, curve.meshes],
+            switch_error,
         })
     }
 }

@@ -120,7 +120,7 @@ pub struct HbtBaked {
     pub small: SmallLevel,
     /// The tree billboard's and the one-sample meshes' ꟻLIP against the reference at each of
     /// [`super::switch::SIZES`] ([`super::switch::measure`]): where the meshes open on a plant
-    /// without main branches.
+    /// without main branches (empty for a plant with main branches: not used, not measured).
     pub switch_error: [Vec<f32>; 2],
 }
 
@@ -130,14 +130,15 @@ impl HbtBaked {
         crate::directions::SAMPLE_COUNTS[self.view_level as usize]
     }
 
-    /// The measured mesh switch ([`HbtBaked::switch_error`]) as a curve.
-    pub fn switch_curve(&self) -> super::switch::SwitchCurve {
-        super::switch::SwitchCurve {
+    /// The measured mesh switch ([`HbtBaked::switch_error`]) as a curve; `None` for a plant
+    /// with main branches (not measured: their thresholds apply).
+    pub fn switch_curve(&self) -> Option<super::switch::SwitchCurve> {
+        (!self.switch_error[0].is_empty()).then(|| super::switch::SwitchCurve {
             sizes: super::switch::SIZES.to_vec(),
             billboard: self.switch_error[0].clone(),
             meshes: self.switch_error[1].clone(),
             tile: self.tile,
-        }
+        })
     }
 
     /// Light samples.
@@ -462,12 +463,16 @@ impl crate::bake::codec::Codec for HbtBaked {
         };
         let switch_error = [d.f32s()?, d.f32s()?];
         let n = super::switch::SIZES.len();
-        if switch_error
-            .iter()
-            .any(|c| c.len() != n || c.iter().any(|x| !(x.is_finite() && *x >= 0.0)))
+        let len = switch_error[0].len();
+        if (len != 0 && len != n)
+            || switch_error[1].len() != len
+            || switch_error
+                .iter()
+                .flatten()
+                .any(|x| !(x.is_finite() && *x >= 0.0))
         {
             return Err(bad(format!(
-                "switch errors: {} and {} values, {n} finite ones each expected",
+                "switch errors: {} and {} values, none or {n} finite ones each expected",
                 switch_error[0].len(),
                 switch_error[1].len()
             )));

@@ -286,9 +286,9 @@ impl Hbt {
                 true => (b.tree_texel(), b.tree_texel()),
                 false => (b.tree_texel(), b.mesh_texel()),
             };
-            let mesh_pixels = match measured {
-                true => b.switch_curve().crossing_texel_pixels(),
-                false => select::mesh_pixels(params, !placements.is_empty()),
+            let mesh_pixels = match b.switch_curve().filter(|_| measured) {
+                Some(c) => c.crossing_texel_pixels(),
+                None => select::mesh_pixels(params, !placements.is_empty()),
             };
             // Branch by branch: the plant's meshes with each placement's triangles together.
             let split = match &mesh_pipes {
