@@ -134,7 +134,8 @@
 //!
 //! Cost: bake = V + L rasterisations plus a CPU lighting pass of V·L·(tile·ss)² samples per
 //! object, plus the branch cube-maps (and, for a plant without main branches, the measured mesh
-//! switch: 19 rasterisations of 4 views and 72 ꟻLIP evaluations, 2–5 s); per frame, 2 direction look-ups per billboard (CPU) and
+//! switch: 19 rasterisations of 4 views and 72 ꟻLIP evaluations, 2–5 s); per frame, 2
+//! direction look-ups per billboard (CPU) and
 //! 8 cube-map look-ups per opened branch, one instanced draw per pass, up to 9 + 3 texture
 //! fetches per fragment; meshes as `geometry`. Memory (default, per plant): tree BTF 66 × 18 at
 //! 32 px = 7.2 MB; up to 17 objects × 18 × 18 = 33 MB; the plant's meshes; branch cube-maps
