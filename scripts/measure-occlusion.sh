@@ -62,73 +62,48 @@ bench occlusion 1m-ground 1m 1000,93.7,1000:1600,93.7,1600 geometry 1 --occlusio
 picture 1m-ground 1m 1000,93.7,1000:1600,93.7,1600 geometry
 
 # Flights, each frame with the cull against the same frame without (a tree missing for a
-# frame shows as a pair that differs): FLIGHT_TECHNIQUE over forest-10m's hills (only the
-# terrain occludes impostors), then boxtree 30 m above forest-1m's canopy (trees occlude trees).
-# A flight's first 600 m (forest-10m-flight.toml's first 6 s) in 80 frames (7.6 m apart, under
-# the cull's 10 m cut): each frame with the cull against the same frame without.
-python3 - "$OUT/flight.toml" <<'PY'
+# frame shows as a pair that differs): 6 s of path in 80 frames (7.6 m apart, under the cull's
+# 10 m cut). FLIGHT_TECHNIQUE over forest-10m's hills (forest-10m-flight.toml's first 600 m:
+# only the terrain occludes impostors), then boxtree 30 m above forest-1m's canopy (trees
+# occlude trees).
+flight() { # name scene technique eye-start eye-end look-start look-end (x,y,z each)
+  local name=$1 scene=$2 technique=$3
+  python3 - "$OUT/$name.toml" "$4" "$5" "$6" "$7" <<'PY'
 import sys
-open(sys.argv[1], "w").write('''interpolation = "linear"
+out, p0, p1, l0, l1 = sys.argv[1:6]
+open(out, "w").write(f'''interpolation = "linear"
 fov_deg = 55
 [[key]]
 t = 0
-position = [2000.0, 340, 2000.0]
-look_at = [2700.0, 230, 2700.0]
+position = [{p0}]
+look_at = [{l0}]
 [[key]]
 t = 6
-position = [2424.26, 340, 2424.26]
-look_at = [3124.26, 230, 3124.26]
+position = [{p1}]
+look_at = [{l1}]
 ''')
 PY
-for mode in plain occlusion; do
-  flag=()
-  [ "$mode" = occlusion ] && flag=(--occlusion-cull)
-  mkdir -p "$OUT/flight-$mode"
-  "$B" render assets/scenes/bench/forest-10m.toml --technique "${FLIGHT_TECHNIQUE:-octahedral}" \
-    --size 160x90 --no-shadows --path "$OUT/flight.toml" --frames 80 "${flag[@]}" \
-    --out "$OUT/flight-$mode/f.png" >/dev/null 2>&1
-done
-for f in "$OUT"/flight-plain/*.png; do
-  n=$(basename "$f")
-  echo "$n $("$B" compare "$f" "$OUT/flight-occlusion/$n" --json)"
-done >"$OUT/flight.txt"
-python3 - "$OUT/flight.txt" <<'PY'
-import json, sys
-rows = [(l.split(" ", 1)[0], json.loads(l.split(" ", 1)[1])["flip_mean"]) for l in open(sys.argv[1])]
-bad = [r for r in rows if r[1] > 0.001]
-print(f"flight: {len(rows)} frames, FLIP with/without the cull median {sorted(x for _, x in rows)[len(rows)//2]:.5f}"
-      f" max {max(x for _, x in rows):.5f}; frames over 0.001: {len(bad)} {bad[:8]}")
-PY
-
-python3 - "$OUT/canopy.toml" <<'PY'
-import sys
-open(sys.argv[1], "w").write('''interpolation = "linear"
-fov_deg = 55
-[[key]]
-t = 0
-position = [1000.0, 121.7, 1000.0]
-look_at = [1600.0, 100, 1600.0]
-[[key]]
-t = 6
-position = [1424.26, 121.7, 1424.26]
-look_at = [2024.26, 100, 2024.26]
-''')
-PY
-for mode in plain occlusion; do
-  flag=()
-  [ "$mode" = occlusion ] && flag=(--occlusion-cull)
-  mkdir -p "$OUT/canopy-$mode"
-  "$B" render assets/scenes/bench/forest-1m.toml --technique boxtree --size 160x90 --no-shadows \
-    --path "$OUT/canopy.toml" --frames 80 "${flag[@]}" --out "$OUT/canopy-$mode/f.png" >/dev/null 2>&1
-done
-for f in "$OUT"/canopy-plain/*.png; do
-  n=$(basename "$f")
-  echo "$n $("$B" compare "$f" "$OUT/canopy-occlusion/$n" --json)"
-done >"$OUT/canopy.txt"
-python3 - "$OUT/canopy.txt" <<'PY'
+  for mode in plain occlusion; do
+    local flag=()
+    [ "$mode" = occlusion ] && flag=(--occlusion-cull)
+    mkdir -p "$OUT/$name-$mode"
+    "$B" render "assets/scenes/bench/forest-$scene.toml" --technique "$technique" --size 160x90 \
+      --no-shadows --path "$OUT/$name.toml" --frames 80 "${flag[@]}" \
+      --out "$OUT/$name-$mode/f.png" >/dev/null 2>&1
+  done
+  for f in "$OUT/$name"-plain/*.png; do
+    n=$(basename "$f")
+    echo "$n $("$B" compare "$f" "$OUT/$name-occlusion/$n" --json)"
+  done >"$OUT/$name.txt"
+  python3 - "$OUT/$name.txt" "$name" <<'PY'
 import json, sys
 rows = [(l.split(" ", 1)[0], json.loads(l.split(" ", 1)[1])["flip_mean"]) for l in open(sys.argv[1])]
 bad = sorted([r for r in rows if r[1] > 0.001], key=lambda r: -r[1])
-print(f"canopy flight: {len(rows)} frames, FLIP with/without the cull median {sorted(x for _, x in rows)[len(rows)//2]:.5f}"
+print(f"{sys.argv[2]}: {len(rows)} frames, FLIP with/without the cull median {sorted(x for _, x in rows)[len(rows)//2]:.5f}"
       f" max {max(x for _, x in rows):.5f}; frames over 0.001: {len(bad)} {bad[:8]}")
 PY
+}
+flight flight 10m "${FLIGHT_TECHNIQUE:-octahedral}" 2000.0,340,2000.0 2424.26,340,2424.26 \
+  2700.0,230,2700.0 3124.26,230,3124.26
+flight canopy 1m boxtree 1000.0,121.7,1000.0 1424.26,121.7,1424.26 \
+  1600.0,100,1600.0 2024.26,100,2024.26

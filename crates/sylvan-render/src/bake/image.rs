@@ -280,7 +280,8 @@ fn unorm8(v: f32) -> u8 {
     (v.clamp(0.0, 1.0) * 255.0).round() as u8
 }
 
-fn srgb8(linear: f32) -> u8 {
+/// A linear value in [0, 1] as an 8-bit sRGB code.
+pub(crate) fn srgb8(linear: f32) -> u8 {
     let l = linear.clamp(0.0, 1.0);
     let s = if l <= 0.003_130_8 {
         l * 12.92

@@ -323,15 +323,9 @@ impl Cull {
         use sylvan_gpu::layout;
         let c = wgpu::ShaderStages::COMPUTE;
         let rw = |binding| layout::storage_rw(binding, c);
-        let pyramid = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: c,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
-            },
-            count: None,
+        let pyramid = |binding| {
+            let unfiltered = wgpu::TextureSampleType::Float { filterable: false };
+            layout::texture(binding, c, unfiltered, wgpu::TextureViewDimension::D2)
         };
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("cull_layout"),

@@ -50,8 +50,8 @@ struct Levels {
     views: [wgpu::TextureView; 2],
     sizes: Vec<[u32; 2]>,
     offsets: Vec<u32>,
-    /// Per level above 0 (reading the level below); level 0's reads the depth target, made
-    /// per frame.
+    /// Per level above 0 (reading the level below); level 0's reads the depth target (see
+    /// [`DepthPyramid::source`]).
     binds: Vec<wgpu::BindGroup>,
     uniforms: Vec<wgpu::Buffer>,
 }
@@ -63,6 +63,9 @@ pub(crate) struct DepthPyramid {
     levels: Levels,
     /// The depth target's size the pyramid was made for.
     source_size: [u32; 2],
+    /// Level 0's bind group and the depth view it reads (made again when the view or the
+    /// levels change).
+    source: Option<(wgpu::TextureView, wgpu::BindGroup)>,
     /// The frame it holds: view-projection and eye (`None` until a frame was reduced).
     held: Option<(Mat4, Vec3)>,
     /// Changes whenever the textures are replaced (the cull's bind groups bind them).
@@ -128,16 +131,12 @@ impl DepthPyramid {
             label: Some("hiz_layout"),
             entries: &[
                 sylvan_gpu::layout::uniform(0, c),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: c,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
+                sylvan_gpu::layout::texture(
+                    1,
+                    c,
+                    wgpu::TextureSampleType::Float { filterable: false },
+                    wgpu::TextureViewDimension::D2,
+                ),
                 wgpu::BindGroupLayoutEntry {
                     binding: 2,
                     visibility: c,
@@ -169,6 +168,7 @@ impl DepthPyramid {
             layout,
             levels,
             source_size: [0, 0],
+            source: None,
             held: None,
             // 0 is the generation of `PyramidUse::none`'s textures.
             generation: 1,
@@ -224,20 +224,24 @@ impl DepthPyramid {
             gpu.check_texture_size("depth pyramid", first[0] * 2, first[1])?;
             self.levels = make(gpu, &self.layout, size);
             self.source_size = size;
+            self.source = None;
             self.generation += 1;
         }
         let l = &self.levels;
-        // The depth target may be re-created at the same size: its bind group is made per frame.
-        let first = crate::technique::common::bind_group(
-            gpu,
-            "hiz_from_depth",
-            &self.layout,
-            &[
-                l.uniforms[0].as_entire_binding(),
-                wgpu::BindingResource::TextureView(depth),
-                wgpu::BindingResource::TextureView(&l.views[0]),
-            ],
-        );
+        if self.source.as_ref().is_none_or(|(view, _)| view != depth) {
+            let bind = crate::technique::common::bind_group(
+                gpu,
+                "hiz_from_depth",
+                &self.layout,
+                &[
+                    l.uniforms[0].as_entire_binding(),
+                    wgpu::BindingResource::TextureView(depth),
+                    wgpu::BindingResource::TextureView(&l.views[0]),
+                ],
+            );
+            self.source = Some((depth.clone(), bind));
+        }
+        let first = &self.source.as_ref().expect("made above").1;
         for (level, &[w, h]) in l.sizes.iter().enumerate() {
             // One pass per level: each reads the one below.
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -248,7 +252,7 @@ impl DepthPyramid {
             pass.set_bind_group(
                 0,
                 match level {
-                    0 => &first,
+                    0 => first,
                     _ => &l.binds[level - 1],
                 },
                 &[],

@@ -307,11 +307,6 @@ impl World {
         }
     }
 
-    /// Whether the occlusion cull is on.
-    pub fn occlusion(&self) -> bool {
-        self.pyramid.is_some()
-    }
-
     /// With the occlusion cull on: records the reduction of the frame's depth (Sylvan's own
     /// reversed-Z main target, `size` pixels, drawn from `eye` with `view_proj`) into the
     /// pyramid the next frame's cull tests against.

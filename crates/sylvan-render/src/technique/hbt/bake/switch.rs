@@ -9,6 +9,7 @@
 //! is the BTF's own and is not part of this comparison.
 
 use crate::RenderError;
+use crate::bake::image::srgb8;
 use crate::bake::{BakeRequest, PlantBaker};
 use glam::Vec3;
 use sylvan_gpu::Gpu;
@@ -108,18 +109,9 @@ pub fn measure(
 
 /// Premultiplied linear RGBA (`n`², row 0 at the top) over [`GROUND`], sRGB-encoded.
 fn over_ground(px: &[[f32; 4]], n: u32) -> image::RgbImage {
-    let encode = |c: f32| {
-        let c = c.clamp(0.0, 1.0);
-        let s = if c <= 0.003_130_8 {
-            c * 12.92
-        } else {
-            1.055 * c.powf(1.0 / 2.4) - 0.055
-        };
-        (s * 255.0).round() as u8
-    };
     let bytes = px
         .iter()
-        .flat_map(|c| [0, 1, 2].map(|k| encode(c[k] + GROUND * (1.0 - c[3]))))
+        .flat_map(|c| [0, 1, 2].map(|k| srgb8(c[k] + GROUND * (1.0 - c[3]))))
         .collect();
     image::RgbImage::from_raw(n, n, bytes).expect("n² pixels")
 }
