@@ -22,6 +22,7 @@ fn small_params() -> BillboardCloudBakeParams {
         tile: 8,
         supersample: 2,
         iterations: 6,
+        parallax: 4.0,
     }
 }
 
@@ -69,31 +70,48 @@ fn every_leaf_is_in_exactly_one_plane_of_each_cloud() {
     }
 }
 
-/// A cell's list holds exactly the leaves whose triangles, projected onto the plane, cover
-/// some point of the cell (checked against a dense CPU rasterisation of every leaf triangle:
-/// nothing covered is missing; and every listed leaf has a sample or an exact overlap there).
+/// Each leaf's triangles in leaf-image coordinates.
+fn uv_tris(plant: &sylvan_plant::Plant, leaf: &cluster::Leaf) -> Vec<[Vec2; 3]> {
+    let m = &plant.leaves;
+    m.indices[leaf.indices.start as usize..leaf.indices.end as usize]
+        .chunks_exact(3)
+        .map(|t| [t[0], t[1], t[2]].map(|i| Vec2::from(m.uvs[i as usize])))
+        .collect()
+}
+
+/// With no parallax (rays along the normal), a cell's list holds exactly the leaves whose
+/// fitted triangles, projected onto the plane, cover some point of the cell: checked against
+/// a dense CPU rasterisation of every fitted triangle (nothing covered is missing; every
+/// listed leaf has a sample there or an exact overlap).
 #[test]
 fn cell_lists_cover_exactly_the_overlapping_leaf_fragments() {
-    let (plant, b) = baked("chestnut");
+    let plant = sylvan_plant::preset("chestnut").expect("preset");
     let leaves = cluster::leaves(&plant);
-    let m = &plant.leaves;
-    let c: &Cloud = &b.clouds[0];
     let planes = cluster::cluster(&plant, &leaves, 40, 6);
+    let spec = layers::CloudSpec {
+        cells: 1 << 14,
+        tile: 8,
+        supersample: 1,
+        layered: true,
+        parallax: 0.0,
+    };
+    let c: Cloud = layers::build(&plant, &leaves, &planes, spec).expect("build");
     let mut checked = 0;
     for (p, members) in c.members.iter().enumerate().step_by(7) {
         let rec = &c.planes[p];
-        let pl = &planes[p];
-        assert_eq!(&pl.leaves, members);
         let (nx, ny) = rec.cells();
         let mut covered = vec![Vec::<u32>::new(); (nx * ny) as usize];
+        let fitted = |l: u32| -> Vec<[Vec2; 3]> {
+            let r = &c.records[l as usize];
+            uv_tris(&plant, &leaves[l as usize])
+                .into_iter()
+                .map(|t| t.map(|uv| layers::leaf_point(r, uv).truncate()))
+                .collect()
+        };
         for &l in members {
-            let leaf = &leaves[l as usize];
-            for t in
-                m.indices[leaf.indices.start as usize..leaf.indices.end as usize].chunks_exact(3)
-            {
-                let tri = [t[0], t[1], t[2]].map(|i| Vec3::from(m.positions[i as usize]));
-                for (pt, _) in samples(tri, 12) {
-                    let (cx, cy) = rec.cell_of(pl.leaf_st(leaf, pt));
+            for tri in fitted(l) {
+                for (pt, _) in samples(tri.map(|x| x.extend(0.0)), 12) {
+                    let (cx, cy) = rec.cell_of(pt.truncate());
                     covered[(cy * nx + cx) as usize].push(l);
                 }
             }
@@ -110,18 +128,13 @@ fn cell_lists_cover_exactly_the_overlapping_leaf_fragments() {
                         "plane {p} cell ({cx},{cy}) misses leaf {l}"
                     );
                 }
-                // Listed but not sampled: must be a true overlap of a projected triangle.
+                // Listed but not sampled: must be a true overlap of a fitted triangle.
                 for l in list.iter().filter(|l| !want.contains(l)) {
-                    let leaf = &leaves[*l as usize];
                     let lo = rec.min() + Vec2::new(cx as f32, cy as f32) * rec.origin_cell[3];
                     let hi = lo + Vec2::splat(rec.origin_cell[3]);
-                    let hit = m.indices[leaf.indices.start as usize..leaf.indices.end as usize]
-                        .chunks_exact(3)
-                        .any(|t| {
-                            let tri = [t[0], t[1], t[2]]
-                                .map(|i| pl.leaf_st(leaf, Vec3::from(m.positions[i as usize])));
-                            layers::triangle_overlaps_box(tri, lo, hi)
-                        });
+                    let hit = fitted(*l)
+                        .into_iter()
+                        .any(|tri| layers::triangle_overlaps_box(tri, lo, hi));
                     assert!(
                         hit,
                         "plane {p} cell ({cx},{cy}) lists leaf {l} that does not overlap it"
@@ -134,8 +147,91 @@ fn cell_lists_cover_exactly_the_overlapping_leaf_fragments() {
     assert!(checked > 100, "only {checked} list entries checked");
 }
 
-/// Where a leaf's own texture is opaque, the walk from the side that leaf faces finds an
-/// opaque leaf at its projection (its own or one in front of it): the layers lose no coverage.
+/// With parallax (the default cloud), every ray within the parallax cone that meets a fitted
+/// leaf crosses the plane in a cell whose list holds that leaf; and no list holds a leaf that
+/// no such ray can reach from its cell (farther than its reach, `parallax × |h|`, from the
+/// cell's box).
+#[test]
+fn parallax_lists_hold_every_leaf_an_oblique_ray_meets() {
+    let (plant, b) = baked("chestnut");
+    let leaves = cluster::leaves(&plant);
+    let c = &b.clouds[0];
+    let par = c.parallax;
+    assert!(par > 0.0, "the near cloud is built with parallax");
+    let mut rng = 0x9e37_79b9_u32;
+    let mut next = move || {
+        rng ^= rng << 13;
+        rng ^= rng >> 17;
+        rng ^= rng << 5;
+        rng as f32 / u32::MAX as f32
+    };
+    let (mut rays, mut lists) = (0usize, 0usize);
+    for (p, members) in c.members.iter().enumerate().step_by(3) {
+        let rec = &c.planes[p];
+        let (nx, ny) = rec.cells();
+        let cm = rec.origin_cell[3];
+        for &l in members.iter().step_by(4) {
+            let r = &c.records[l as usize];
+            for t in uv_tris(&plant, &leaves[l as usize]) {
+                for (_, w) in samples([Vec3::X, Vec3::Y, Vec3::Z], 3) {
+                    let uv = t[0] * w[0] + t[1] * w[1] + t[2] * w[2];
+                    let x = layers::leaf_point(r, uv);
+                    // A ray towards the viewer within the cone, on the side the point is.
+                    let a = next() * std::f32::consts::TAU;
+                    let slope = par * next().sqrt();
+                    let z = if next() < 0.5 { 1.0 } else { -1.0 };
+                    let to_eye = Vec3::new(a.cos() * slope, a.sin() * slope, z);
+                    // Where the ray through x crosses the plane (h = 0).
+                    let st = x.truncate() - to_eye.truncate() * (x.z / to_eye.z);
+                    let g = (st - rec.min()) / cm;
+                    if g.x < 0.0 || g.y < 0.0 || g.x >= nx as f32 || g.y >= ny as f32 {
+                        panic!("plane {p}: leaf {l} seen outside the rectangle at {st}");
+                    }
+                    let (cx, cy) = rec.cell_of(st);
+                    assert!(
+                        c.list(p, cx, cy).contains(&l),
+                        "plane {p} cell ({cx},{cy}) misses leaf {l} along {to_eye}"
+                    );
+                    rays += 1;
+                }
+            }
+        }
+        for cy in 0..ny {
+            for cx in 0..nx {
+                let lo = rec.min() + Vec2::new(cx as f32, cy as f32) * cm;
+                let hi = lo + Vec2::splat(cm);
+                for &l in c.list(p, cx, cy) {
+                    let r = &c.records[l as usize];
+                    let near = uv_tris(&plant, &leaves[l as usize]).into_iter().any(|t| {
+                        let q = t.map(|uv| layers::leaf_point(r, uv));
+                        let reach = par * q.iter().map(|x| x.z.abs()).fold(0.0, f32::max);
+                        let tri = q.map(|x| x.truncate());
+                        layers::triangle_overlaps_box(
+                            tri,
+                            lo - Vec2::splat(reach + 1e-5),
+                            hi + Vec2::splat(reach + 1e-5),
+                        )
+                    });
+                    assert!(
+                        near,
+                        "plane {p} cell ({cx},{cy}) lists unreachable leaf {l}"
+                    );
+                    lists += 1;
+                }
+            }
+        }
+    }
+    assert!(rays > 2000 && lists > 1000, "{rays} rays, {lists} entries");
+}
+
+/// Plane space (`s`, `t` on the plane, `h` above it) of a model-space direction.
+fn plane_dir(pl: &cluster::Plane, d: Vec3) -> Vec3 {
+    Vec3::new(d.dot(pl.u), d.dot(pl.v), d.dot(pl.normal))
+}
+
+/// Where a leaf's own texture is opaque, the walk along the leaf's normal (the view that
+/// shows it best) and along a random view within 60° of it finds an opaque leaf there (its
+/// own or one in front of it): the layers lose no coverage.
 #[test]
 fn the_walk_keeps_the_leaves_coverage() {
     let (plant, b) = baked("chestnut");
@@ -143,7 +239,14 @@ fn the_walk_keeps_the_leaves_coverage() {
     let m = &plant.leaves;
     let c = &b.clouds[0];
     let planes = cluster::cluster(&plant, &leaves, 40, 6);
-    let (mut opaque, mut found) = (0usize, 0usize);
+    let mut rng = 0x1234_5678_u32;
+    let mut next = move || {
+        rng ^= rng << 13;
+        rng ^= rng >> 17;
+        rng ^= rng << 5;
+        rng as f32 / u32::MAX as f32 * 2.0 - 1.0
+    };
+    let (mut opaque, mut found, mut found_oblique) = (0usize, 0usize, 0usize);
     for (p, members) in c.members.iter().enumerate() {
         let pl = &planes[p];
         assert_eq!(&pl.leaves, members);
@@ -154,6 +257,7 @@ fn the_walk_keeps_the_leaves_coverage() {
             {
                 let tri = [t[0], t[1], t[2]].map(|i| Vec3::from(m.positions[i as usize]));
                 let uvs = [t[0], t[1], t[2]].map(|i| Vec2::from(m.uvs[i as usize]));
+                let face = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize_or_zero();
                 for (pt, w) in samples(tri, 4) {
                     let uv = uvs[0] * w[0] + uvs[1] * w[1] + uvs[2] * w[2];
                     let tex = &plant.leaf_texture;
@@ -165,24 +269,44 @@ fn the_walk_keeps_the_leaves_coverage() {
                         continue;
                     }
                     opaque += 1;
-                    if layers::walk(c, &plant, p, pl.leaf_st(leaf, pt), true).is_some() {
-                        found += 1;
-                    }
+                    let h = pl.height(pt);
+                    let seen = |dir: Vec3| {
+                        // The viewer on the side the leaf faces; the pixel whose (bent) ray
+                        // passes through the point.
+                        let e = plane_dir(pl, dir);
+                        let e = if e.z == 0.0 { Vec3::Z } else { e };
+                        let ray = layers::parallax_ray(e, c.parallax);
+                        let st = pl.project(pt) - ray.truncate() * (h / ray.z);
+                        layers::walk(c, &plant, p, st, e).is_some()
+                    };
+                    let n = if face.dot(pl.normal) >= 0.0 {
+                        face
+                    } else {
+                        -face
+                    };
+                    found += seen(n) as usize;
+                    let jitter = Vec3::new(next(), next(), next()) * 0.9;
+                    let oblique = (n + jitter).normalize_or(n);
+                    let oblique = if oblique.dot(n) < 0.5 { n } else { oblique };
+                    found_oblique += seen(oblique) as usize;
                 }
             }
         }
     }
     let kept = found as f64 / opaque.max(1) as f64;
-    // Measured 0.969 (the affine map per leaf is exact for flat leaves; the chestnut's blades
-    // are bent, and a bent blade's projection is not quite affine).
+    let kept_oblique = found_oblique as f64 / opaque.max(1) as f64;
+    eprintln!("{opaque} opaque points: kept {kept:.3} along the normal, {kept_oblique:.3} oblique");
+    // Measured 0.998 along the normal, 0.936 oblique: the fitted leaf is exact for flat
+    // leaves; the chestnut's blades are bent, so a point of the real blade may lie off the flat
+    // fit, the more so the more oblique the view.
     assert!(
-        opaque > 1000 && kept > 0.95,
-        "{found} of {opaque} opaque leaf points covered ({kept:.3})"
+        opaque > 1000 && kept > 0.97 && kept_oblique > 0.9,
+        "{found}/{found_oblique} of {opaque} opaque leaf points covered"
     );
 }
 
-/// Where two listed leaves are both opaque at a point, the walk from the front side returns
-/// the one higher above the plane and the walk from the back side the lower one.
+/// Where two listed leaves are both opaque at a point, the walk seen from the front side
+/// returns the one higher above the plane and the walk from the back side the lower one.
 #[test]
 fn front_and_back_walks_see_opposite_ends_of_the_list() {
     let (plant, b) = baked("chestnut");
@@ -200,8 +324,8 @@ fn front_and_back_walks_see_opposite_ends_of_the_list() {
                 let cm = rec.origin_cell[3];
                 let st = rec.min() + (Vec2::new(cx as f32, cy as f32) + 0.5) * cm;
                 let (Some(f), Some(k)) = (
-                    layers::walk(c, &plant, p, st, true),
-                    layers::walk(c, &plant, p, st, false),
+                    layers::walk(c, &plant, p, st, Vec3::Z),
+                    layers::walk(c, &plant, p, st, -Vec3::Z),
                 ) else {
                     continue;
                 };

@@ -22,7 +22,8 @@ struct CloudOut {
 };
 
 // A plane with what the upload adds (`GpuPlane` in `draw.rs`): x first record of its
-// species' cloud, y its low-resolution tile pair, z its species' first list entry.
+// species' cloud, y its low-resolution tile pair, z its species' first list entry, w the
+// steepest ray its lists hold (f32 bits, `Cloud::parallax`).
 struct PlaneExtra {
     extra: vec4<u32>,
 };
@@ -130,6 +131,17 @@ fn lowres_kept(alpha: f32, in: CloudOut, f: vec2<f32>) -> bool {
     return presence_alpha(alpha, in.keep.x) > h;
 }
 
+// The ray a plane pixel walks with (`layers::parallax_ray`): towards the eye, bent where it
+// is steeper than `parallax` to that slope.
+fn parallax_ray(to_eye: vec3<f32>, parallax: f32) -> vec3<f32> {
+    let side = length(to_eye.xy);
+    let limit = parallax * abs(to_eye.z);
+    if (side > limit) {
+        return vec3<f32>(to_eye.xy * (limit / side), to_eye.z);
+    }
+    return to_eye;
+}
+
 // GPSS07 §5: the cell's list walked from the side seen until an opaque, kept leaf texel, at
 // most `entries` of them (§5.1), else the low-resolution image; `shade` also fetches the leaf's
 // colour and normal.
@@ -141,7 +153,10 @@ fn evaluate(in: CloudOut, shade: bool, layered: bool) -> CloudHit {
     let size = vec2<f32>(p.n.w, bitcast<f32>(p.grid.w));
     let f = (in.st - vec2<f32>(p.u.w, p.v.w)) / size;
     let df = vec2<f32>(length(dst_dx / size), length(dst_dy / size));
-    let back = dot(in.to_eye, p.n.xyz) < 0.0;
+    // Towards the eye in plane space, and the ray the leaves are met with.
+    let eye = vec3<f32>(dot(in.to_eye, p.u.xyz), dot(in.to_eye, p.v.xyz), dot(in.to_eye, p.n.xyz));
+    let ray = parallax_ray(eye, bitcast<f32>(x.w));
+    let back = eye.z < 0.0;
     var hit: CloudHit;
     hit.kind = 0u;
     var len = 0u;
@@ -161,16 +176,30 @@ fn evaluate(in: CloudOut, shade: bool, layered: bool) -> CloudHit {
         for (var i = 0u; i < entries; i = i + 1u) {
             let e = lists[start + select(i, len - 1u - i, back)];
             let r = records[x.x + e];
-            let uv = mat2x2<f32>(r.inv_a, r.inv_b) * (in.st - r.origin);
-            let lo = unpack2x16unorm(r.uv_box.x);
-            let hi = unpack2x16unorm(r.uv_box.y);
+            // The ray through this pixel met with the leaf's plane (deviation: GPSS07 draws
+            // the leaf image where it lies projected on the billboard).
+            let m = cross(r.to_u, r.to_v);
+            let me = dot(m, ray);
+            if (abs(me) <= 1e-6 * length(m) * length(ray)) {
+                continue;
+            }
+            let w = vec3<f32>(in.st, 0.0) - r.origin;
+            let hit3 = w - ray * (dot(m, w) / me);
+            let uv = vec2<f32>(dot(r.to_u, hit3), dot(r.to_v, hit3));
+            let lo = unpack2x16unorm(r.uv_min);
+            let hi = unpack2x16unorm(r.uv_max);
             if (any(uv < lo) || any(uv > hi)) {
                 continue;
             }
-            let m = mat2x2<f32>(r.inv_a, r.inv_b);
+            // d uv / d st along the ray: the leaf's texels per plane offset.
+            let bray = vec2<f32>(dot(r.to_u, ray), dot(r.to_v, ray));
+            let jm = mat2x2<f32>(
+                vec2<f32>(r.to_u.x, r.to_v.x) - bray * (m.x / me),
+                vec2<f32>(r.to_u.y, r.to_v.y) - bray * (m.y / me),
+            );
             // The footprint's minor axis (as anisotropic filtering would): a leaf oblique to
-            // its plane is squeezed on it, and the major axis would blur its cut-out away.
-            let lod = log2(max(min(length(m * dst_dx * tex), length(m * dst_dy * tex)), 1e-6));
+            // the view is squeezed, and the major axis would blur its cut-out away.
+            let lod = log2(max(min(length(jm * dst_dx * tex), length(jm * dst_dy * tex)), 1e-6));
             let a = textureSampleLevel(leaf_texture, leaf_sampler, uv, lod).a;
             if (a < 0.5 || !leaf_kept(e, in.keep, in.rot.z)) {
                 continue;

@@ -15,17 +15,20 @@ struct CloudPlane {
     grid: vec4<u32>,
 };
 
-// A leaf (`LeafRecord` in `layers.rs`, 48 bytes).
+// A leaf (`LeafRecord` in `layers.rs`, 64 bytes): in plane space (s, t, height) the leaf
+// image's uv = 0 lies at `origin`, and uv = (to_u · x, to_v · x) for an offset x from it on
+// the leaf's plane.
 struct LeafRecord {
-    origin: vec2<f32>,
-    // The column-major 2×2 map from plane offsets to leaf uv, one column each.
-    inv_a: vec2<f32>,
-    inv_b: vec2<f32>,
-    uv_box: vec2<u32>,
+    origin: vec3<f32>,
+    uv_min: u32,
+    to_u: vec3<f32>,
+    uv_max: u32,
+    to_v: vec3<f32>,
     normal: u32,
     tangent: u32,
     color: u32,
     ao: u32,
+    pad: u32,
 };
 
 struct CloudParams {

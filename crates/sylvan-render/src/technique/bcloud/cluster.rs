@@ -5,11 +5,12 @@
 //! a leaf's cost on a plane is its squared distance from the plane (weighted [`NORMAL_WEIGHT`]
 //! times more than spread along it, so clusters come out thin and flat), its squared distance
 //! from the cluster's centre along the plane (so a plane's rectangle stays small: billboards
-//! are not infinite planes) and an optional term for the leaf standing edge-on to the plane
-//! (off by default: leaves are turned towards their plane before projection, so an oblique
-//! leaf keeps most of its size, [`Plane::leaf_st`]). A cluster's plane is the least-squares plane of its
-//! leaves' vertices (smallest principal axis), or the mean leaf normal where the leaves do not
-//! span a plane. Seeds are farthest-point samples (deterministic); an emptied cluster is
+//! are not infinite planes) and a term for the leaf standing edge-on to the plane
+//! ([`EDGE_ON_WEIGHT`]: a leaf is drawn where the view ray meets it, but a leaf turned away
+//! from its plane is seen face-on where the plane is seen at a grazing angle, and a plane
+//! cannot cover more of the screen than its own rectangle does). A cluster's plane is the
+//! least-squares plane of its leaves' vertices (smallest principal axis), or the mean leaf
+//! normal where the leaves do not span a plane. Seeds are farthest-point samples (deterministic); an emptied cluster is
 //! re-seeded at the worst-fitting leaf. Every leaf belongs to exactly one plane.
 
 use glam::{Vec2, Vec3};
@@ -22,13 +23,13 @@ use sylvan_plant::Plant;
 /// 1000 → 0.150, 4000 → 0.144, 16000 → 0.142, 10⁵ → 0.140 (thinner slabs span more of the
 /// crown, so their rectangles — the fill — grow: 4000 kept).
 pub const NORMAL_WEIGHT: f32 = 4000.0;
-/// How far a leaf is turned towards its plane's orientation before it is projected onto it
-/// (0: projected as it is; 1: laid flat). See [`Plane::leaf_st`].
-pub const LEAF_TURN: f32 = 0.5;
-/// Weight of a leaf standing edge-on to its plane (× the leaf's squared size). 0: leaves are
-/// turned towards their plane ([`Plane::leaf_st`]), so their angle to it costs little
-/// coverage; their distance from it (parallax) matters more.
-const EDGE_ON_WEIGHT: f32 = 0.0;
+/// Weight of a leaf standing edge-on to its plane (× the leaf's squared size × (1 − |cos|) of
+/// the angle between their normals). A leaf is drawn where the view ray meets it
+/// (`layers::leaf_uv`), but only inside its plane's screen footprint: a leaf face-on to the
+/// eye on a plane seen edge-on shrinks to a sliver. Measured on one chestnut (ꟻLIP vs 16-spp
+/// geometry, 900×900, parallax 2; at 800 / 400 px): 0 → 0.131 / 0.113, 1000 → 0.127 / 0.107,
+/// 5000 → 0.122 / 0.101, 20000 → 0.124 / 0.100 (5000 kept).
+pub const EDGE_ON_WEIGHT: f32 = 5000.0;
 
 /// One leaf of the plant: its triangles and their summary.
 #[derive(Debug, Clone)]
@@ -137,23 +138,6 @@ impl Plane {
     /// Signed distance of a point in front of the plane.
     pub fn height(&self, p: Vec3) -> f32 {
         (p - self.origin).dot(self.normal)
-    }
-
-    /// Where vertex `p` of `leaf` lies on the plane: the leaf turned about its centre half-way
-    /// ([`LEAF_TURN`]) from its own orientation towards the plane's, then projected onto it.
-    /// GPSS07 §4.2 places leaf images on the plane; a plain orthogonal projection shrinks a
-    /// leaf oblique to its plane by the cosine and thins the crown seen from other directions,
-    /// a full turn keeps its size but moves its tips. Measured on one chestnut at 400 px (ꟻLIP
-    /// vs 16-spp geometry): projection 0.167, full turn 0.152, half turn 0.150.
-    pub fn leaf_st(&self, leaf: &Leaf, p: Vec3) -> Vec2 {
-        let n = if leaf.normal.dot(self.normal) < 0.0 {
-            -leaf.normal
-        } else {
-            leaf.normal
-        };
-        let q =
-            glam::Quat::IDENTITY.slerp(glam::Quat::from_rotation_arc(n, self.normal), LEAF_TURN);
-        self.project(leaf.centre + q * (p - leaf.centre))
     }
 
     /// The rectangle's corner `(s, t)` in model space.
@@ -378,7 +362,7 @@ pub fn cluster(plant: &Plant, leaves: &[Leaf], k: usize, iterations: u32) -> Vec
             for &l in &plane.leaves {
                 let leaf = &leaves[l as usize];
                 for &i in &leaf.vertices {
-                    let st = plane.leaf_st(leaf, Vec3::from(pos[i as usize]));
+                    let st = plane.project(Vec3::from(pos[i as usize]));
                     plane.min = plane.min.min(st);
                     plane.max = plane.max.max(st);
                 }

@@ -224,7 +224,12 @@ impl BillboardCloud {
                     r.grid[2] += cell_offset;
                     let mut raw = [0u32; 24];
                     raw[..20].copy_from_slice(bytemuck::cast_slice(std::slice::from_ref(&r)));
-                    raw[20..].copy_from_slice(&[record_offset, pair, list_offset, 0]);
+                    raw[20..].copy_from_slice(&[
+                        record_offset,
+                        pair,
+                        list_offset,
+                        c.parallax.to_bits(),
+                    ]);
                     let global = gplanes.len() as u32;
                     gplanes.push(raw);
                     let (o, u, v) = (
@@ -272,7 +277,10 @@ impl BillboardCloud {
         for (what, bytes) in [
             ("hash cells", cells.len() as u64 * 4),
             ("lists", lists.len() as u64 * 4),
-            ("leaf records", records.len() as u64 * 48),
+            (
+                "leaf records",
+                (records.len() * std::mem::size_of::<layers::LeafRecord>()) as u64,
+            ),
         ] {
             if bytes > limit {
                 return Err(RenderError::Gpu(sylvan_gpu::GpuError::Limit {

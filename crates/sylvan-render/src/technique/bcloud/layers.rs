@@ -7,21 +7,27 @@
 //!
 //! Deviations, each for a stated reason:
 //! - **Records per leaf, lists of record numbers.** GPSS07 stores a full record per (cell,
-//!   leaf) fragment; here a list entry is a 4-byte record number and the 48-byte record is
+//!   leaf) fragment; here a list entry is a 4-byte record number and the 64-byte record is
 //!   stored once per leaf: the same walk with one more indirection and several times less
 //!   memory (a leaf overlaps several cells).
-//! - **An affine map instead of an orientation index.** GPSS07 picks a leaf image by an
-//!   orientation index and scales it; a leaf projected orthogonally onto a plane is an affine
-//!   image of its texture, so each record holds that map (fitted by least squares to the
-//!   leaf's vertices, exact for a flat leaf): leaf positions, sizes and orientations are kept
-//!   exactly and one leaf image serves every leaf.
+//! - **The leaf where the view ray meets it, not its image on the plane.** GPSS07 draws each
+//!   leaf as an image placed on the billboard (picked by an orientation index), so a leaf off
+//!   its plane or turned away from it is displaced and re-shaped with the view, which no
+//!   texture resolution recovers (measured: 3.3× 1-spp geometry's ꟻLIP at 800 px). Here each
+//!   record holds the leaf's own plane — the affine image of its texture that fits its
+//!   vertices best (least squares, exact for a flat leaf) — and the walk intersects the pixel's
+//!   ray with it ([`leaf_uv`]): leaves keep their positions, sizes, orientations and overlaps
+//!   from every side, and one leaf image serves every leaf. Rays steeper than `parallax` (the
+//!   tangent of their angle to the plane's normal) are bent to that slope ([`parallax_ray`]),
+//!   which bounds how far a leaf's fragments spread over the plane.
 //! - **Fragments from the leaves' triangles.** GPSS07 splats each leaf as a point sprite of its
-//!   bounding square and depth-peels the sprites; a cell here lists the leaves whose projected
-//!   triangles overlap it (exact 2D separating-axis test), so no cell lists a leaf that cannot
-//!   cover it and none misses one that does. A leaf is turned towards its plane about its
-//!   centre before it is projected ([`Plane::leaf_st`]), and the order is the height of its
-//!   centre above the plane, descending (ties by leaf number): front to back from the plane's
-//!   front side, back to front read from its other end.
+//!   bounding square and depth-peels the sprites; a cell here lists the leaves whose fitted
+//!   triangles, projected onto the plane and widened by `parallax` × their height above it,
+//!   overlap it (exact 2D separating-axis test, [`leaf_cells`]), so no ray within the
+//!   `parallax` cone meets a leaf its cell does not list. The rectangle grows by the same
+//!   reach. The order is the height of the leaf's centre above the plane, descending (ties by
+//!   leaf number): front to back from the plane's front side, back to front read from its
+//!   other end.
 //! - **Ambient occlusion per vertex is the reference's** (`crown_occlusion` of
 //!   `shaders/frame.wgsl`, the term `geometry` shades every leaf vertex with), extrapolated to
 //!   the leaf's box corners by least squares (fig. 11), so the technique matches the ground
@@ -43,16 +49,27 @@ pub const MAX_ENTRIES: usize = 1 << 24;
 /// Most cells along one side of a plane's hash grid.
 pub const MAX_CELLS_PER_SIDE: u32 = 1024;
 
-/// One leaf as the shader reads it (48 bytes).
+/// One leaf as the shader reads it (64 bytes).
+///
+/// The leaf is the affine image of its texture that fits its vertices best: in plane space
+/// (`s`, `t` along the plane's axes, `h` the height above it) the point of leaf image
+/// coordinate `uv` is `origin + A uv`; the record holds `origin` and the two rows of `A`'s
+/// pseudo-inverse (`uv = [to_u; to_v] (x − origin)` for any point `x` of the leaf's plane), so
+/// a ray through the billboard is intersected with the leaf where it lies ([`leaf_uv`]).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
 pub struct LeafRecord {
-    /// Plane point where the leaf image's `uv = 0` lies (metres, plane coordinates).
-    pub origin: [f32; 2],
-    /// Column-major 2×2 map from plane offsets to leaf `uv`.
-    pub inv: [f32; 4],
-    /// The leaf's `uv` box: `pack2x16unorm(min)`, `pack2x16unorm(max)`.
-    pub uv_box: [u32; 2],
+    /// Plane-space point (`s`, `t`, `h`) where the leaf image's `uv = 0` lies.
+    pub origin: [f32; 3],
+    /// The leaf's `uv` box minimum, `pack2x16unorm` (a box with min > max: the leaf has no
+    /// area and is never hit).
+    pub uv_min: u32,
+    /// Row of the map from plane-space offsets to leaf `u`.
+    pub to_u: [f32; 3],
+    /// The `uv` box maximum, `pack2x16unorm`.
+    pub uv_max: u32,
+    /// Row of the map from plane-space offsets to leaf `v`.
+    pub to_v: [f32; 3],
     /// Front normal (model space), octahedral `pack2x16snorm`.
     pub normal: u32,
     /// Direction of `+u` on the leaf (model space), octahedral `pack2x16snorm`.
@@ -61,6 +78,15 @@ pub struct LeafRecord {
     pub color: u32,
     /// Ambient occlusion at the `uv` box corners (min,min), (max,min), (min,max), (max,max).
     pub ao: u32,
+    /// Zero.
+    pub pad: u32,
+}
+
+impl LeafRecord {
+    /// The leaf's `uv` box.
+    pub fn uv_box(&self) -> (Vec2, Vec2) {
+        (unpack_unorm2(self.uv_min), unpack_unorm2(self.uv_max))
+    }
 }
 
 /// A plane as the shader reads it (80 bytes).
@@ -132,6 +158,9 @@ pub struct Cloud {
     /// Whether the shader walks this cloud's lists (the farthest cloud keeps only its
     /// low-resolution tiles: `cells`, `lists` and `records` are empty).
     pub layered: bool,
+    /// Steepest ray the lists hold every leaf for: the tangent of its angle to the planes'
+    /// normal ([`parallax_ray`]).
+    pub parallax: f32,
 }
 
 impl Cloud {
@@ -273,38 +302,50 @@ fn record(plant: &Plant, leaf: &Leaf, plane: &Plane) -> LeafRecord {
     let (bmin, bmax) = (Vec3::from(plant.bbox_min), Vec3::from(plant.bbox_max));
     let mut uv_min = Vec2::splat(f32::MAX);
     let mut uv_max = Vec2::splat(f32::MIN);
-    let mut sx = Vec::with_capacity(leaf.vertices.len());
-    let mut sy = Vec::with_capacity(leaf.vertices.len());
-    let mut px = [Vec::new(), Vec::new(), Vec::new()];
+    // Per plane-space coordinate (s, t, h), then per model-space one: samples over uv.
+    let mut fits: [Vec<(Vec2, f32)>; 6] = Default::default();
     let mut color = Vec3::ZERO;
     for &i in &leaf.vertices {
         let uv = Vec2::from(m.uvs[i as usize]);
         let p = Vec3::from(m.positions[i as usize]);
-        let st = plane.leaf_st(leaf, p);
+        let st = plane.project(p);
         uv_min = uv_min.min(uv);
         uv_max = uv_max.max(uv);
-        sx.push((uv, st.x));
-        sy.push((uv, st.y));
-        for (k, list) in px.iter_mut().enumerate() {
-            list.push((uv, p[k]));
+        for (k, x) in [st.x, st.y, plane.height(p), p.x, p.y, p.z]
+            .into_iter()
+            .enumerate()
+        {
+            fits[k].push((uv, x));
         }
         color += Vec3::from(m.colors[i as usize]);
     }
     color /= leaf.vertices.len() as f32;
-    // st = P uv + q, least squares; the record holds P⁻¹ and q.
-    let [a, b, qx] = fit_affine(&sx);
-    let [c, d, qy] = fit_affine(&sy);
-    let p = glam::Mat2::from_cols(Vec2::new(a, c), Vec2::new(b, d));
-    let inv = if p.determinant().abs() > 1e-12 {
-        p.inverse()
+    let f: Vec<[f32; 3]> = fits.iter().map(|l| fit_affine(l)).collect();
+    // Plane space: x = a uv + origin, least squares; the record holds origin and the rows of
+    // a's pseudo-inverse (aᵀa)⁻¹aᵀ.
+    let (du, dv) = (
+        Vec3::new(f[0][0], f[1][0], f[2][0]),
+        Vec3::new(f[0][1], f[1][1], f[2][1]),
+    );
+    let origin = Vec3::new(f[0][2], f[1][2], f[2][2]);
+    let g = glam::Mat2::from_cols(
+        Vec2::new(du.dot(du), du.dot(dv)),
+        Vec2::new(du.dot(dv), dv.dot(dv)),
+    );
+    let (to_u, to_v, area) = if g.determinant() > 1e-12 * (g.x_axis.x * g.y_axis.y).max(1e-30) {
+        let gi = g.inverse();
+        (
+            du * gi.x_axis.x + dv * gi.y_axis.x,
+            du * gi.x_axis.y + dv * gi.y_axis.y,
+            true,
+        )
     } else {
-        // Edge-on to its plane: it covers no area there.
-        glam::Mat2::ZERO
+        // A leaf without area (its vertices on a line): never hit.
+        (Vec3::ZERO, Vec3::ZERO, false)
     };
-    // The leaf's frame: +u and +v directions in model space.
-    let fit3: Vec<[f32; 3]> = px.iter().map(|l| fit_affine(l)).collect();
-    let t = Vec3::new(fit3[0][0], fit3[1][0], fit3[2][0]);
-    let bv = Vec3::new(fit3[0][1], fit3[1][1], fit3[2][1]);
+    // The leaf's frame in model space: +u and +v directions.
+    let t = Vec3::new(f[3][0], f[4][0], f[5][0]);
+    let bv = Vec3::new(f[3][1], f[4][1], f[5][1]);
     let n = leaf.normal;
     let t = (t - n * t.dot(n)).normalize_or(n.any_orthonormal_vector());
     let flip = n.cross(t).dot(bv) < 0.0;
@@ -320,14 +361,49 @@ fn record(plant: &Plant, leaf: &Leaf, plane: &Plane) -> LeafRecord {
         .collect();
     let ao = fit_bilinear(&ao_samples);
     let c8 = |x: f32| (x.clamp(0.0, 1.0) * 255.0).round() as u32;
+    let (uv_min, uv_max) = if area {
+        (pack_unorm2(uv_min), pack_unorm2(uv_max))
+    } else {
+        (pack_unorm2(Vec2::ONE), pack_unorm2(Vec2::ZERO))
+    };
     LeafRecord {
-        origin: [qx, qy],
-        inv: inv.to_cols_array(),
-        uv_box: [pack_unorm2(uv_min), pack_unorm2(uv_max)],
+        origin: origin.to_array(),
+        uv_min,
+        to_u: to_u.to_array(),
+        uv_max,
+        to_v: to_v.to_array(),
         normal: oct_encode(n),
         tangent: oct_encode(t),
         color: c8(color.x) | (c8(color.y) << 8) | (c8(color.z) << 16) | ((flip as u32) << 24),
         ao: c8(ao[0]) | (c8(ao[1]) << 8) | (c8(ao[2]) << 16) | (c8(ao[3]) << 24),
+        pad: 0,
+    }
+}
+
+/// Where the record's fitted leaf lies at image coordinate `uv` (plane space `s`, `t`, `h`):
+/// the inverse of [`LeafRecord::to_u`]/`to_v` on the leaf's plane.
+pub fn leaf_point(rec: &LeafRecord, uv: Vec2) -> Vec3 {
+    let (tu, tv) = (Vec3::from(rec.to_u), Vec3::from(rec.to_v));
+    // The rows span the leaf's plane; A = rows (row rowᵀ)⁻¹ maps uv back into it.
+    let g = glam::Mat2::from_cols(
+        Vec2::new(tu.dot(tu), tu.dot(tv)),
+        Vec2::new(tu.dot(tv), tv.dot(tv)),
+    );
+    let c = g.inverse() * uv;
+    Vec3::from(rec.origin) + tu * c.x + tv * c.y
+}
+
+/// The ray direction (plane space, towards the viewer) a pixel of a plane walks with:
+/// `to_eye` bent, where it is steeper than `parallax` (the tangent of its angle to the
+/// normal), to that angle — the lists hold every leaf such a ray can meet, so nothing is
+/// missed; beyond, leaves move less than they should (the shader's `parallax_ray`).
+pub fn parallax_ray(to_eye: Vec3, parallax: f32) -> Vec3 {
+    let side = to_eye.truncate().length();
+    let limit = parallax * to_eye.z.abs();
+    if side > limit {
+        (to_eye.truncate() * (limit / side)).extend(to_eye.z)
+    } else {
+        to_eye
     }
 }
 
@@ -395,30 +471,83 @@ pub struct Hit {
     pub uv: Vec2,
 }
 
-/// The leaf image coordinates of plane point `st` on `rec`, if inside its box.
-pub fn leaf_uv(rec: &LeafRecord, st: Vec2) -> Option<Vec2> {
-    let inv = glam::Mat2::from_cols_array(&rec.inv);
-    let uv = inv * (st - Vec2::from(rec.origin));
-    let (lo, hi) = (unpack_unorm2(rec.uv_box[0]), unpack_unorm2(rec.uv_box[1]));
-    (uv.cmpge(lo).all() && uv.cmple(hi).all() && inv != glam::Mat2::ZERO).then_some(uv)
+/// Where the ray through plane point `st` along `ray` (plane space, [`parallax_ray`]) meets
+/// the leaf of `rec`: its image coordinates, if inside its box.
+pub fn leaf_uv(rec: &LeafRecord, st: Vec2, ray: Vec3) -> Option<Vec2> {
+    let (tu, tv) = (Vec3::from(rec.to_u), Vec3::from(rec.to_v));
+    let m = tu.cross(tv);
+    let me = m.dot(ray);
+    if me.abs() <= 1e-6 * m.length() * ray.length() || me == 0.0 {
+        return None;
+    }
+    let w = st.extend(0.0) - Vec3::from(rec.origin);
+    let x = w - ray * (m.dot(w) / me);
+    let uv = Vec2::new(tu.dot(x), tv.dot(x));
+    let (lo, hi) = rec.uv_box();
+    (uv.cmpge(lo).all() && uv.cmple(hi).all()).then_some(uv)
 }
 
 /// The CPU twin of the fragment shader's walk (§5, fig. 7): the first entry of the cell's
-/// list whose leaf image is opaque at `st` (alpha ≥ 0.5), from the front (`front`) or from the
-/// back end of the list.
-pub fn walk(cloud: &Cloud, plant: &Plant, plane: usize, st: Vec2, front: bool) -> Option<Hit> {
+/// list whose leaf image is opaque (alpha ≥ 0.5) where the ray through `st` towards `to_eye`
+/// (plane space; bent by [`parallax_ray`]) meets it — from the front of the list when the ray
+/// leaves the plane's front side, from the back end otherwise.
+pub fn walk(cloud: &Cloud, plant: &Plant, plane: usize, st: Vec2, to_eye: Vec3) -> Option<Hit> {
     let p = &cloud.planes[plane];
     let (cx, cy) = p.cell_of(st);
     let list = cloud.list(plane, cx, cy);
+    let ray = parallax_ray(to_eye, cloud.parallax);
     let mut visit = |&r: &u32| {
         let rec = &cloud.records[r as usize];
-        let uv = leaf_uv(rec, st)?;
+        let uv = leaf_uv(rec, st, ray)?;
         (sample(&plant.leaf_texture, uv)[3] >= 0.5).then_some(Hit { record: r, uv })
     };
-    if front {
+    if to_eye.z >= 0.0 {
         list.iter().find_map(&mut visit)
     } else {
         list.iter().rev().find_map(&mut visit)
+    }
+}
+
+/// The cells of a `nx` × `ny` grid of `cell` metres from `min` that the ray bent by
+/// [`parallax_ray`] can see the fitted leaf of `rec` through: its triangles `tris` (image
+/// coordinates) placed by the fit, projected onto the plane and widened by `parallax` × their
+/// largest height (a ray of slope ≤ `parallax` moves a point at height `h` by at most
+/// `parallax |h|` on the plane). Appends cell numbers (with repeats) to `out`.
+#[allow(clippy::too_many_arguments)] // one grid, one leaf
+pub fn leaf_cells(
+    rec: &LeafRecord,
+    tris: &[[Vec2; 3]],
+    parallax: f32,
+    min: Vec2,
+    cell: f32,
+    (nx, ny): (u32, u32),
+    out: &mut Vec<u32>,
+) {
+    let (lo_uv, hi_uv) = rec.uv_box();
+    if lo_uv.cmpgt(hi_uv).any() {
+        return;
+    }
+    for t in tris {
+        let p = t.map(|uv| leaf_point(rec, uv));
+        let reach = parallax * p.iter().map(|x| x.z.abs()).fold(0.0, f32::max);
+        let tri = p.map(|x| x.truncate());
+        let lo = (tri[0].min(tri[1]).min(tri[2]) - Vec2::splat(reach) - min) / cell;
+        let hi = (tri[0].max(tri[1]).max(tri[2]) + Vec2::splat(reach) - min) / cell;
+        if hi.x < 0.0 || hi.y < 0.0 {
+            continue;
+        }
+        let (x0, y0) = (lo.x.floor().max(0.0) as u32, lo.y.floor().max(0.0) as u32);
+        let x1 = (hi.x.floor().max(0.0) as u32).min(nx - 1);
+        let y1 = (hi.y.floor().max(0.0) as u32).min(ny - 1);
+        for cy in y0..=y1 {
+            for cx in x0..=x1 {
+                let clo = min + Vec2::new(cx as f32, cy as f32) * cell;
+                let chi = clo + Vec2::splat(cell);
+                if triangle_overlaps_box(tri, clo - Vec2::splat(reach), chi + Vec2::splat(reach)) {
+                    out.push(cy * nx + cx);
+                }
+            }
+        }
     }
 }
 
@@ -433,6 +562,8 @@ pub struct CloudSpec {
     pub supersample: u32,
     /// Keep the lists for the shader (else only the low-resolution tiles).
     pub layered: bool,
+    /// Steepest ray (tangent of its angle to a plane's normal) the lists are built for.
+    pub parallax: f32,
 }
 
 /// Builds one cloud from clustered planes.
@@ -443,18 +574,54 @@ pub fn build(
     spec: CloudSpec,
 ) -> Result<Cloud, String> {
     let m = &plant.leaves;
-    let area: f32 = planes
+    let parallax = if spec.layered { spec.parallax } else { 0.0 };
+    let mut records = vec![LeafRecord::zeroed(); leaves.len()];
+    // Each leaf's triangles in image coordinates.
+    let uv_tris = |leaf: &Leaf| -> Vec<[Vec2; 3]> {
+        m.indices[leaf.indices.start as usize..leaf.indices.end as usize]
+            .chunks_exact(3)
+            .map(|t| [t[0], t[1], t[2]].map(|i| Vec2::from(m.uvs[i as usize])))
+            .collect()
+    };
+    // The rectangles: every place a listed ray can meet a leaf of the plane (the fitted
+    // leaves, widened by their reach).
+    let mut rects = Vec::with_capacity(planes.len());
+    for plane in planes {
+        let (mut lo, mut hi) = (Vec2::splat(f32::MAX), Vec2::splat(f32::MIN));
+        for &l in &plane.leaves {
+            let leaf = &leaves[l as usize];
+            let rec = record(plant, leaf, plane);
+            records[l as usize] = rec;
+            let (lo_uv, hi_uv) = rec.uv_box();
+            if lo_uv.cmpgt(hi_uv).any() {
+                continue;
+            }
+            for t in uv_tris(leaf) {
+                for uv in t {
+                    let x = leaf_point(&rec, uv);
+                    let reach = Vec2::splat(parallax * x.z.abs());
+                    lo = lo.min(x.truncate() - reach);
+                    hi = hi.max(x.truncate() + reach);
+                }
+            }
+        }
+        if lo.x > hi.x {
+            (lo, hi) = (plane.min, plane.max);
+        }
+        // A rectangle of some width even for a single edge-on leaf.
+        rects.push((lo - Vec2::splat(1e-3), hi + Vec2::splat(1e-3)));
+    }
+    let area: f32 = rects
         .iter()
-        .map(|p| (p.max - p.min).x * (p.max - p.min).y)
+        .map(|(lo, hi)| (hi.x - lo.x) * (hi.y - lo.y))
         .sum();
     let cell_m = (area / spec.cells.max(1) as f32).sqrt().max(1e-5);
-    let mut records = vec![LeafRecord::zeroed(); leaves.len()];
     let mut out_planes = Vec::with_capacity(planes.len());
     let mut cells: Vec<u32> = Vec::new();
     let mut lists: Vec<u32> = Vec::new();
     let mut members = Vec::with_capacity(planes.len());
-    for plane in planes {
-        let size = plane.max - plane.min;
+    for (plane, &(min, max)) in planes.iter().zip(&rects) {
+        let size = max - min;
         let cm = cell_m
             .max(size.x / MAX_CELLS_PER_SIDE as f32)
             .max(size.y / MAX_CELLS_PER_SIDE as f32);
@@ -462,8 +629,8 @@ pub fn build(
         let ny = ((size.y / cm).ceil() as u32).clamp(1, MAX_CELLS_PER_SIDE);
         let rec = PlaneRecord {
             origin_cell: plane.origin.extend(cm).to_array(),
-            u: plane.u.extend(plane.min.x).to_array(),
-            v: plane.v.extend(plane.min.y).to_array(),
+            u: plane.u.extend(min.x).to_array(),
+            v: plane.v.extend(min.y).to_array(),
             n: plane.normal.extend(size.x).to_array(),
             grid: [nx, ny, cells.len() as u32, size.y.to_bits()],
         };
@@ -472,28 +639,18 @@ pub fn build(
         let mut touched: Vec<u32> = Vec::new();
         for &l in &plane.leaves {
             let leaf = &leaves[l as usize];
-            records[l as usize] = record(plant, leaf, plane);
             // Sorted by the height of the leaf's centre above the plane.
             let height = plane.height(leaf.centre);
             touched.clear();
-            let tris = &m.indices[leaf.indices.start as usize..leaf.indices.end as usize];
-            for t in tris.chunks_exact(3) {
-                let tri = [t[0], t[1], t[2]]
-                    .map(|i| plane.leaf_st(leaf, Vec3::from(m.positions[i as usize])));
-                let lo = (tri[0].min(tri[1]).min(tri[2]) - plane.min) / cm;
-                let hi = (tri[0].max(tri[1]).max(tri[2]) - plane.min) / cm;
-                let (x0, y0) = (lo.x.floor().max(0.0) as u32, lo.y.floor().max(0.0) as u32);
-                let x1 = (hi.x.floor().max(0.0) as u32).min(nx - 1);
-                let y1 = (hi.y.floor().max(0.0) as u32).min(ny - 1);
-                for cy in y0..=y1 {
-                    for cx in x0..=x1 {
-                        let clo = plane.min + Vec2::new(cx as f32, cy as f32) * cm;
-                        if triangle_overlaps_box(tri, clo, clo + Vec2::splat(cm)) {
-                            touched.push(cy * nx + cx);
-                        }
-                    }
-                }
-            }
+            leaf_cells(
+                &records[l as usize],
+                &uv_tris(leaf),
+                parallax,
+                min,
+                cm,
+                (nx, ny),
+                &mut touched,
+            );
             touched.sort_unstable();
             touched.dedup();
             for &c in &touched {
@@ -529,6 +686,7 @@ pub fn build(
         tile: spec.tile,
         lowres: Vec::new(),
         layered: spec.layered,
+        parallax,
     };
     cloud.lowres = (0..cloud.planes.len())
         .flat_map(|p| [true, false].map(|front| (p, front)))
@@ -555,6 +713,8 @@ fn lowres_tile(
 ) -> TileImage {
     let p = &cloud.planes[plane];
     let n_plane = Vec3::from_slice(&p.n[..3]) * if front { 1.0 } else { -1.0 };
+    // Seen straight on (plane space).
+    let side = Vec3::Z * if front { 1.0 } else { -1.0 };
     let (size, ss) = (spec.tile as usize, spec.supersample.max(1) as usize);
     let inv = 1.0 / (ss * ss) as f32;
     let mut color = vec![[0.0f32; 4]; size * size];
@@ -576,7 +736,7 @@ fn lowres_tile(
                         (y as f32 + (sy as f32 + 0.5) / ss as f32) / size as f32,
                     );
                     let st = min + f * ext;
-                    let Some(hit) = walk(cloud, plant, plane, st, front) else {
+                    let Some(hit) = walk(cloud, plant, plane, st, side) else {
                         continue;
                     };
                     let rec = &cloud.records[hit.record as usize];
@@ -639,7 +799,7 @@ fn shade(
         ((rec.color >> 16) & 255) as f32 / 255.0,
     ];
     let albedo = [0, 1, 2].map(|k| crate::technique::common::srgb_to_linear(tex[k]) * col[k]);
-    let (lo, hi) = (unpack_unorm2(rec.uv_box[0]), unpack_unorm2(rec.uv_box[1]));
+    let (lo, hi) = rec.uv_box();
     let q = ((uv - lo) / (hi - lo).max(Vec2::splat(1e-6))).clamp(Vec2::ZERO, Vec2::ONE);
     let a = [0, 8, 16, 24].map(|s| ((rec.ao >> s) & 255) as f32 / 255.0);
     let ao =

@@ -38,10 +38,15 @@
 //!
 //! Deviations (each a stated reason; see also [`layers`]): storage buffers instead of hash and
 //! list textures (the same layout, read without filtering); records per leaf with 4-byte list
-//! entries; an affine map per leaf instead of an orientation index; fragments from the leaves'
-//! triangles (exact overlap) instead of depth-peeled point sprites; the occlusion is the
-//! reference's own term so the technique matches its ground truth; the depth written is the
-//! plane's (as GPSS07), so leaves cut by another plane are resolved to the plane's thickness.
+//! entries; each leaf drawn where the pixel's ray meets the leaf's own (fitted) plane instead
+//! of as an image placed on the billboard by an orientation index — GPSS07's images are
+//! displaced and re-shaped by the leaf's height above and angle to its plane, which no texture
+//! resolution recovers (rays steeper than the bake's `parallax` are bent to it, which bounds
+//! the lists); fragments from the leaves' triangles (exact overlap) instead of depth-peeled
+//! point sprites; clustering that also weighs a leaf's angle to its plane
+//! ([`cluster::EDGE_ON_WEIGHT`]); the occlusion is the reference's own term so the technique
+//! matches its ground truth; the depth written is the plane's (as GPSS07), so leaves cut by
+//! another plane are resolved to the plane's thickness.
 //!
 //! **Cost**: per pixel of a plane one hash read and up to `entries` record reads and leaf
 //! texture fetches (or one low-resolution fetch); per tree 4 vertices per plane plus its wood.
@@ -52,12 +57,11 @@
 //! plane pixel, most of them empty) is the cost on a software rasteriser.
 //!
 //! **Measured** (lavapipe, release, `scripts/measure-bcloud.sh`): the chestnut (17,752 leaves)
-//! bakes in 1.1 s into 7.7 MB (polygonal leaves 8.0 MB; a plain billboard cloud of the same
-//! planes textured for the 800 px close-up ≈ 319 MB, estimated). ꟻLIP vs `geometry --spp 16`
-//! around one chestnut 800/400/200/100 px tall: 0.190/0.144/0.139/0.140 (1-spp geometry
-//! 0.057/0.072/0.093/0.116, octahedral 0.385/0.312/0.271/0.246): GPSS07's 1.25×-of-geometry
-//! close-up fidelity is reached at 100 px only — leaves drawn on planes are displaced and
-//! re-shaped by their distance and angle to the plane, which no texture resolution recovers.
+//! bakes in 1.1 s into 10.5 MB (polygonal leaves 8.0 MB). ꟻLIP vs `geometry --spp 16` around
+//! one chestnut 800/400/200/100 px tall: 0.115/0.095/0.110/0.129 (1-spp geometry
+//! 0.057/0.072/0.093/0.116): GPSS07's 1.25×-of-geometry close-up fidelity is reached at 200
+//! and 100 px, not at 400 (1.31×) or 800 px (2.0×): a plane seen at a grazing angle covers
+//! little of the screen, so the leaves it holds that face the eye are drawn as slivers.
 
 pub mod bake;
 pub mod cluster;
@@ -90,6 +94,10 @@ pub struct BillboardCloudBakeParams {
     pub supersample: u32,
     /// Clustering refinements.
     pub iterations: u32,
+    /// Steepest view ray, as the tangent of its angle to a plane's normal, for which leaves are
+    /// drawn exactly where they lie off their plane; steeper rays are bent to it (leaves then
+    /// move less than they should). Lists and rectangles widen with it.
+    pub parallax: f32,
 }
 
 impl Default for BillboardCloudBakeParams {
@@ -102,6 +110,7 @@ impl Default for BillboardCloudBakeParams {
             tile: 16,
             supersample: 4,
             iterations: 10,
+            parallax: 4.0,
         }
     }
 }
@@ -143,6 +152,11 @@ impl ParamTable for BillboardCloudBakeParams {
             unit: "iterations",
             doc: "clustering refinements (0–100)",
         },
+        ParamDoc {
+            key: "parallax",
+            unit: "slope",
+            doc: "steepest view ray (tangent of its angle to a plane's normal) that sees leaves exactly where they lie off their plane; lists and rectangles widen with it (0–8)",
+        },
     ];
 
     fn validate(&self) -> Result<(), String> {
@@ -165,7 +179,14 @@ impl ParamTable for BillboardCloudBakeParams {
             ));
         }
         range("supersample", self.supersample, 1, 8)?;
-        range("iterations", self.iterations, 0, 100)
+        range("iterations", self.iterations, 0, 100)?;
+        if !(0.0..=8.0).contains(&self.parallax) {
+            return Err(format!(
+                "billboard-cloud parallax {}: must be 0 to 8",
+                self.parallax
+            ));
+        }
+        Ok(())
     }
 }
 
