@@ -52,7 +52,7 @@ SCENE=assets/scenes/eval/one-chestnut.toml
 TECHS="billboard-cloud octahedral boxtree hbt"
 # The same view without the tree (for the leaf masks).
 printf 'x,y\n' > "$OUT/no-trees.csv"
-sed "s|one-pine.csv|$PWD/$OUT/no-trees.csv|" $SCENE > "$OUT/no-trees.toml"
+sed "s|one-pine.csv|$(cd "$OUT" && pwd)/no-trees.csv|" $SCENE > "$OUT/no-trees.toml"
 masks=()
 for h in 800 400 200 100; do
   d=$(python3 -c "import math; print('%.2f' % (14*900/(2*math.tan(math.radians(20)))/$h))")

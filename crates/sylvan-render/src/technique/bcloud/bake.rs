@@ -13,7 +13,7 @@ use sylvan_gpu::Gpu;
 use sylvan_plant::Plant;
 
 /// Bumped whenever the payload below or the bake's result changes.
-pub const FORMAT_VERSION: u32 = 3;
+pub const FORMAT_VERSION: u32 = 4;
 
 /// One plant's three clouds, nearest first.
 #[derive(Debug, Clone, PartialEq)]
@@ -64,7 +64,6 @@ pub fn bake_clouds(
                 tile,
                 supersample: p.supersample,
                 layered,
-                parallax: p.parallax,
             },
         )
         .map_err(RenderError::Plant)?;
@@ -143,7 +142,6 @@ impl Bake for BillboardCloudBake {
 fn encode_cloud(e: &mut Encoder, c: &Cloud) {
     e.u32(c.tile);
     e.u32(c.layered as u32);
-    e.u32(c.parallax.to_bits());
     e.u32s(bytemuck::cast_slice(&c.planes));
     e.u64(c.members.len() as u64);
     for m in &c.members {
@@ -162,10 +160,6 @@ fn decode_cloud(d: &mut Decoder<'_>) -> Result<Cloud, DecodeError> {
     let bad = |m: String| DecodeError(m);
     let tile = d.u32()?;
     let layered = d.u32()? != 0;
-    let parallax = f32::from_bits(d.u32()?);
-    if !(parallax.is_finite() && parallax >= 0.0) {
-        return Err(bad(format!("parallax {parallax} is not a slope")));
-    }
     let raw = d.u32s()?;
     let ps = std::mem::size_of::<PlaneRecord>() / 4;
     if raw.len() % ps != 0 {
@@ -209,9 +203,13 @@ fn decode_cloud(d: &mut Decoder<'_>) -> Result<Cloud, DecodeError> {
             .chain(&p.u)
             .chain(&p.v)
             .chain(&p.n)
+            .chain(&p.slab)
             .any(|x| !x.is_finite())
         {
             return Err(bad("a plane is not finite".into()));
+        }
+        if p.slab[0] > p.slab[1] {
+            return Err(bad("a plane's slab is upside down".into()));
         }
     }
     for &c in &cells {
@@ -231,7 +229,6 @@ fn decode_cloud(d: &mut Decoder<'_>) -> Result<Cloud, DecodeError> {
         tile,
         lowres,
         layered,
-        parallax,
     })
 }
 

@@ -2,28 +2,33 @@
 // overlapping them (§5, fig. 7), with the shader level of detail of §5.1 and the reference's
 // leaf lighting (§5.2). Bind groups 1 and 2: `bindings.wgsl`.
 
+// A corner of the box drawn for one block of a plane's cells (its back faces are drawn).
 struct CloudIn {
     @location(0) position: vec3<f32>,
-    @location(1) st: vec2<f32>,
+    // Plane space: s, t and the height above the plane.
+    @location(1) pst: vec3<f32>,
     @location(2) plane: u32,
+    // The block's rectangle (plane space: min s, min t, max s, max t).
+    @location(3) block: vec4<f32>,
 };
 
 struct CloudOut {
     @builtin(position) pos: vec4<f32>,
     @location(0) world: vec3<f32>,
-    // Plane coordinates (plant units).
-    @location(1) st: vec2<f32>,
+    // Plane space (plant units).
+    @location(1) pst: vec3<f32>,
     // From the point towards the eye (model space, plant units).
     @location(2) to_eye: vec3<f32>,
     @location(3) @interpolate(flat) plane: u32,
     @location(4) @interpolate(flat) rot: vec4<f32>,
-    // x: presence; y: 1 where this cloud is the farther side of its cross-fade.
-    @location(5) @interpolate(flat) keep: vec2<f32>,
+    // x: presence; y: 1 where this cloud is the farther side of its cross-fade; z: the
+    // instance's scale (plant units to metres).
+    @location(5) @interpolate(flat) keep: vec3<f32>,
+    @location(6) @interpolate(flat) block: vec4<f32>,
 };
 
 // A plane with what the upload adds (`GpuPlane` in `draw.rs`): x first record of its
-// species' cloud, y its low-resolution tile pair, z its species' first list entry, w the
-// steepest ray its lists hold (f32 bits, `Cloud::parallax`).
+// species' cloud, y its low-resolution tile pair, z its species' first list entry, w unused.
 struct PlaneExtra {
     extra: vec4<u32>,
 };
@@ -44,13 +49,14 @@ fn cloud_vertex(v: CloudIn, inst: TreeInstance, to_eye_model: vec3<f32>) -> Clou
     var out: CloudOut;
     out.pos = frame.view_proj * vec4<f32>(world, 1.0);
     out.world = world;
-    out.st = v.st;
+    out.pst = v.pst;
+    out.block = v.block;
     out.to_eye = to_eye_model;
     out.plane = v.plane;
     out.rot = inst.rot;
     let w = cloud.windows[cloud_level(v.plane)];
     let d = distance(frame.camera.xyz, inst.base_scale.xyz);
-    out.keep = vec2<f32>(inst.rot.w, select(0.0, 1.0, d < 0.5 * (w.y + w.z)));
+    out.keep = vec3<f32>(inst.rot.w, select(0.0, 1.0, d < 0.5 * (w.y + w.z)), inst.base_scale.w);
     return out;
 }
 
@@ -62,7 +68,8 @@ fn vs_cloud(v: CloudIn, inst: TreeInstance) -> CloudOut {
 
 @vertex
 fn vs_cloud_shadow(v: CloudIn, inst: TreeInstance) -> CloudOut {
-    return cloud_vertex(v, inst, instance_dir_to_model(frame.sun_dir.xyz, inst.rot));
+    // The light's eye is far away along the sun's direction.
+    return cloud_vertex(v, inst, instance_dir_to_model(frame.sun_dir.xyz, inst.rot) * SUN_EYE);
 }
 
 fn unpack_oct(v: u32) -> vec3<f32> {
@@ -76,7 +83,7 @@ fn unpack_oct(v: u32) -> vec3<f32> {
 // During a cross-fade a leaf is kept when its hash is below the presence on the nearer side
 // of the fade and above one minus it on the farther side, so the two sides draw complementary
 // leaves (`geometry` keeps hash < presence: it is always the nearer side).
-fn leaf_kept(leaf: u32, keep: vec2<f32>, seed: f32) -> bool {
+fn leaf_kept(leaf: u32, keep: vec3<f32>, seed: f32) -> bool {
     let l = f32(leaf);
     let h = hash13(vec3<f32>(l, l * 0.37 + 11.0, seed * 97.0));
     if (keep.y > 0.5) {
@@ -93,6 +100,8 @@ struct CloudHit {
     n: vec3<f32>,
     albedo: vec3<f32>,
     ao: f32,
+    // From the drawn box point to the point seen (plane space).
+    offset: vec3<f32>,
 };
 
 fn atlas_uv(a: vec4<u32>, tile: u32, f: vec2<f32>, inv_tile: f32) -> vec3<f32> {
@@ -131,115 +140,191 @@ fn lowres_kept(alpha: f32, in: CloudOut, f: vec2<f32>) -> bool {
     return presence_alpha(alpha, in.keep.x) > h;
 }
 
-// The ray a plane pixel walks with (`layers::parallax_ray`): towards the eye, bent where it
-// is steeper than `parallax` to that slope.
-fn parallax_ray(to_eye: vec3<f32>, parallax: f32) -> vec3<f32> {
-    let side = length(to_eye.xy);
-    let limit = parallax * abs(to_eye.z);
-    if (side > limit) {
-        return vec3<f32>(to_eye.xy * (limit / side), to_eye.z);
-    }
-    return to_eye;
+// How far the shadow passes put the light's eye (plant units; `vs_cloud_shadow`).
+const SUN_EYE: f32 = 1.0e6;
+// Most hash cells one ray walks through a slab (`layers::MAX_CELLS`).
+const MAX_CELLS: u32 = 64u;
+
+// Where the ray `o + λ d` meets the box [lo, hi]: (λ in, λ out); in > out where it misses.
+fn ray_box(o: vec3<f32>, d: vec3<f32>, lo: vec3<f32>, hi: vec3<f32>) -> vec2<f32> {
+    let inv = 1.0 / select(d, vec3<f32>(1e-20), abs(d) < vec3<f32>(1e-20));
+    let a = (lo - o) * inv;
+    let b = (hi - o) * inv;
+    let near = min(a, b);
+    let far = max(a, b);
+    return vec2<f32>(max(max(near.x, near.y), near.z), min(min(far.x, far.y), far.z));
 }
 
-// GPSS07 §5: the cell's list walked from the side seen until an opaque, kept leaf texel, at
-// most `entries` of them (§5.1), else the low-resolution image; `shade` also fetches the leaf's
-// colour and normal.
+// GPSS07 §5 through a slab (`layers::walk`): the pixel's ray followed through the drawn
+// block's box cell by cell of the hash grid, nearest first; in each cell the nearest opaque,
+// kept leaf of its list where the ray meets it inside the cell — at most `entries` list entries
+// in all (§5.1), else the low-resolution image where the ray crosses the plane; `shade` also
+// fetches the leaf's colour and normal.
 fn evaluate(in: CloudOut, shade: bool, layered: bool) -> CloudHit {
     let p = planes[in.plane];
     let x = plane_extra[in.plane].extra;
-    let dst_dx = dpdx(in.st);
-    let dst_dy = dpdy(in.st);
+    // Plane space: towards the eye, its distance, and the ray away from it.
+    let te = vec3<f32>(dot(in.to_eye, p.u.xyz), dot(in.to_eye, p.v.xyz), dot(in.to_eye, p.n.xyz));
+    let eye_dist = length(te);
+    let d = -te / max(eye_dist, 1e-20);
+    // The pixel's footprint across the ray (plant units per pixel, x and y).
+    let gx0 = dpdx(in.pst);
+    let gy0 = dpdy(in.pst);
+    let gx = gx0 - d * dot(gx0, d);
+    let gy = gy0 - d * dot(gy0, d);
+    let rmin = vec2<f32>(p.u.w, p.v.w);
     let size = vec2<f32>(p.n.w, bitcast<f32>(p.grid.w));
-    let f = (in.st - vec2<f32>(p.u.w, p.v.w)) / size;
-    let df = vec2<f32>(length(dst_dx / size), length(dst_dy / size));
-    // Towards the eye in plane space, and the ray the leaves are met with.
-    let eye = vec3<f32>(dot(in.to_eye, p.u.xyz), dot(in.to_eye, p.v.xyz), dot(in.to_eye, p.n.xyz));
-    let ray = parallax_ray(eye, bitcast<f32>(x.w));
-    let back = eye.z < 0.0;
+    let slab = p.slab;
+    // The ray enters the block's box at `q` (or starts at the eye) and leaves it `span` later.
+    let box = ray_box(in.pst, d, vec3<f32>(in.block.xy, slab.x), vec3<f32>(in.block.zw, slab.y));
+    let back_in = max(box.x, -eye_dist);
+    let q = in.pst + d * back_in;
+    let span = max(box.y - back_in, 0.0);
+    let back = te.z < 0.0;
     var hit: CloudHit;
     hit.kind = 0u;
-    var len = 0u;
-    var start = 0u;
-    var entries = 0u;
+    hit.offset = vec3<f32>(0.0);
+    var exhausted = false;
     if (layered) {
-        let cell_m = p.origin_cell.w;
-        let c = clamp(vec2<i32>(floor((in.st - vec2<f32>(p.u.w, p.v.w)) / cell_m)), vec2<i32>(0), vec2<i32>(p.grid.xy) - 1);
-        let packed = cells[p.grid.z + u32(c.y) * p.grid.x + u32(c.x)];
-        len = packed & 255u;
-        start = (packed >> 8u) + x.z;
+        let cm = p.origin_cell.w;
+        let n = vec2<i32>(p.grid.xy);
         // The projected diagonal of a hash cell, in pixels.
-        let per_px = max(length(dst_dx), length(dst_dy));
-        let diag = 1.41421356 * cell_m / max(per_px, 1e-9);
-        entries = min(len, u32(floor(cloud.draw.x * diag)));
+        let per_px = max(length(gx), length(gy));
+        let diag = 1.41421356 * cm / max(per_px, 1e-9);
+        var budget = u32(floor(cloud.draw.x * diag));
         let tex = vec2<f32>(textureDimensions(leaf_texture));
-        for (var i = 0u; i < entries; i = i + 1u) {
-            let e = lists[start + select(i, len - 1u - i, back)];
-            let r = records[x.x + e];
-            // The ray through this pixel met with the leaf's plane (deviation: GPSS07 draws
-            // the leaf image where it lies projected on the billboard).
-            let m = cross(r.to_u, r.to_v);
-            let me = dot(m, ray);
-            if (abs(me) <= 1e-6 * length(m) * length(ray)) {
-                continue;
+        var c = clamp(vec2<i32>(floor((q.xy - rmin) / cm)), vec2<i32>(0), n - 1);
+        let step = select(vec2<i32>(-1), vec2<i32>(1), d.xy >= vec2<f32>(0.0));
+        let inv = 1.0 / select(d.xy, vec2<f32>(1e-20), abs(d.xy) < vec2<f32>(1e-20));
+        var enter = 0.0;
+        exhausted = true;
+        for (var k = 0u; k < MAX_CELLS; k = k + 1u) {
+            let edge = rmin + vec2<f32>(c + max(step, vec2<i32>(0))) * cm;
+            let tn = (edge - q.xy) * inv;
+            let exit = min(min(tn.x, tn.y), span);
+            let packed = cells[p.grid.z + u32(c.y) * p.grid.x + u32(c.x)];
+            let len = packed & 255u;
+            let start = (packed >> 8u) + x.z;
+            if (len > budget) {
+                break;
             }
-            let w = vec3<f32>(in.st, 0.0) - r.origin;
-            let hit3 = w - ray * (dot(m, w) / me);
-            let uv = vec2<f32>(dot(r.to_u, hit3), dot(r.to_v, hit3));
-            let lo = unpack2x16unorm(r.uv_min);
-            let hi = unpack2x16unorm(r.uv_max);
-            if (any(uv < lo) || any(uv > hi)) {
-                continue;
-            }
-            // d uv / d st along the ray: the leaf's texels per plane offset.
-            let bray = vec2<f32>(dot(r.to_u, ray), dot(r.to_v, ray));
-            let jm = mat2x2<f32>(
-                vec2<f32>(r.to_u.x, r.to_v.x) - bray * (m.x / me),
-                vec2<f32>(r.to_u.y, r.to_v.y) - bray * (m.y / me),
-            );
-            // The footprint's minor axis (as anisotropic filtering would): a leaf oblique to
-            // the view is squeezed, and the major axis would blur its cut-out away.
-            let lod = log2(max(min(length(jm * dst_dx * tex), length(jm * dst_dy * tex)), 1e-6));
-            let a = textureSampleLevel(leaf_texture, leaf_sampler, uv, lod).a;
-            if (a < 0.5 || !leaf_kept(e, in.keep, in.rot.z)) {
-                continue;
-            }
-            hit.kind = 1u;
-            if (shade) {
-                let n = unpack_oct(r.normal);
-                let t = unpack_oct(r.tangent);
-                let flip = select(1.0, -1.0, ((r.color >> 24u) & 1u) == 1u);
-                let b = cross(n, t) * flip;
-                let m3 = textureSampleLevel(leaf_normal_map, leaf_sampler, uv, lod).rgb * 2.0 - vec3<f32>(1.0);
-                let bent = normalize(t * m3.x + b * m3.y + n * m3.z);
-                let front = dot(n, in.to_eye) >= 0.0;
-                var rgb = textureSampleLevel(leaf_texture, leaf_sampler, uv, lod).rgb;
-                if (!front) {
-                    rgb = textureSampleLevel(leaf_back, leaf_sampler, uv, lod).rgb;
+            budget = budget - len;
+            let eps = 1e-4 * cm;
+            var best = 3.0e38;
+            for (var i = 0u; i < len; i = i + 1u) {
+                let e = lists[start + select(i, len - 1u - i, back)];
+                let r = records[x.x + e];
+                // The ray met with the leaf's plane (deviation: GPSS07 draws the leaf image
+                // where it lies projected on the billboard).
+                let m = cross(r.to_u, r.to_v);
+                let md = dot(m, d);
+                if (abs(md) <= 1e-6 * length(m)) {
+                    continue;
                 }
-                let col = unpack4x8unorm(r.color).rgb;
-                hit.albedo = rgb * col;
-                hit.n = select(-bent, bent, front);
-                let q = clamp((uv - lo) / max(hi - lo, vec2<f32>(1e-6)), vec2<f32>(0.0), vec2<f32>(1.0));
-                let ao = unpack4x8unorm(r.ao);
-                hit.ao = mix(mix(ao.x, ao.y, q.x), mix(ao.z, ao.w, q.x), q.y);
+                let w = q - r.origin;
+                let lambda = -dot(m, w) / md;
+                if (lambda < enter - eps || lambda > exit + eps || lambda >= best) {
+                    continue;
+                }
+                let h3 = w + d * lambda;
+                let uv = vec2<f32>(dot(r.to_u, h3), dot(r.to_v, h3));
+                let lo = unpack2x16unorm(r.uv_min);
+                let hi = unpack2x16unorm(r.uv_max);
+                if (any(uv < lo) || any(uv > hi)) {
+                    continue;
+                }
+                // d uv / d (ray offset across it): the leaf's texels per pixel.
+                let tu = r.to_u - m * (dot(r.to_u, d) / md);
+                let tv = r.to_v - m * (dot(r.to_v, d) / md);
+                // The footprint's minor axis (as anisotropic filtering would): a leaf oblique
+                // to the view is squeezed, and the major axis would blur its cut-out away.
+                let fx = vec2<f32>(dot(tu, gx), dot(tv, gx)) * tex;
+                let fy = vec2<f32>(dot(tu, gy), dot(tv, gy)) * tex;
+                // Shadow casters test the full-resolution alpha, as `geometry`'s do.
+                let lod = select(0.0, log2(max(min(length(fx), length(fy)), 1e-6)), shade);
+                let a = textureSampleLevel(leaf_texture, leaf_sampler, uv, lod).a;
+                if (a < 0.5 || !leaf_kept(e, in.keep, in.rot.z)) {
+                    continue;
+                }
+                best = lambda;
+                hit.kind = 1u;
+                hit.offset = q + d * lambda - in.pst;
+                if (shade) {
+                    let n = unpack_oct(r.normal);
+                    let t = unpack_oct(r.tangent);
+                    let flip = select(1.0, -1.0, ((r.color >> 24u) & 1u) == 1u);
+                    let b = cross(n, t) * flip;
+                    let m3 = textureSampleLevel(leaf_normal_map, leaf_sampler, uv, lod).rgb * 2.0 - vec3<f32>(1.0);
+                    let bent = normalize(t * m3.x + b * m3.y + n * m3.z);
+                    let front = dot(n, in.to_eye) >= 0.0;
+                    var rgb = textureSampleLevel(leaf_texture, leaf_sampler, uv, lod).rgb;
+                    if (!front) {
+                        rgb = textureSampleLevel(leaf_back, leaf_sampler, uv, lod).rgb;
+                    }
+                    let col = unpack4x8unorm(r.color).rgb;
+                    hit.albedo = rgb * col;
+                    hit.n = select(-bent, bent, front);
+                    let qa = clamp((uv - lo) / max(hi - lo, vec2<f32>(1e-6)), vec2<f32>(0.0), vec2<f32>(1.0));
+                    let ao = unpack4x8unorm(r.ao);
+                    hit.ao = mix(mix(ao.x, ao.y, qa.x), mix(ao.z, ao.w, qa.x), qa.y);
+                }
             }
-            return hit;
+            if (hit.kind != 0u) {
+                return hit;
+            }
+            if (exit >= span) {
+                exhausted = false;
+                break;
+            }
+            if (tn.x <= tn.y) {
+                c.x = c.x + step.x;
+            } else {
+                c.y = c.y + step.y;
+            }
+            if (any(c < vec2<i32>(0)) || any(c >= n)) {
+                exhausted = false;
+                break;
+            }
+            enter = exit;
         }
-        if (entries >= len) {
+        if (!exhausted) {
             return hit;
         }
     }
-    // The entries ran out (or this cloud has only its low-resolution images).
+    // The entries ran out (or this cloud has only its low-resolution images): the image where
+    // the ray crosses the plane.
+    var cross_l = 0.0;
+    if (abs(d.z) > 1e-6) {
+        cross_l = clamp(-q.z / d.z, 0.0, span);
+    }
+    let st = q.xy + d.xy * cross_l;
+    let f = (st - rmin) / size;
+    if (any(f < vec2<f32>(0.0)) || any(f > vec2<f32>(1.0))) {
+        return hit;
+    }
+    let df = vec2<f32>(length(gx.xy / size), length(gy.xy / size));
     let s = lowres(in.plane, f, df, back);
     if (s[0].a <= 0.0 || !lowres_kept(s[0].a, in, f)) {
         return hit;
     }
     hit.kind = 2u;
+    hit.offset = q + d * cross_l - in.pst;
     hit.albedo = s[0].rgb / s[0].a;
     hit.n = normalize(s[1].xyz * 2.0 - vec3<f32>(1.0));
     hit.ao = s[1].w;
     return hit;
+}
+
+// The world point a pixel shows (`offset` from the drawn box point, plane space).
+fn hit_world(in: CloudOut, hit: CloudHit) -> vec3<f32> {
+    let p = planes[in.plane];
+    let o = p.u.xyz * hit.offset.x + p.v.xyz * hit.offset.y + p.n.xyz * hit.offset.z;
+    return in.world + instance_dir_to_world(o * in.keep.z, in.rot);
+}
+
+fn world_depth(world: vec3<f32>) -> f32 {
+    let clip = frame.view_proj * vec4<f32>(world, 1.0);
+    return clip.z / clip.w;
 }
 
 // `geometry`'s leaf lighting (front Lambert, back transmission, sky × occlusion, shadows, fog).
@@ -257,15 +342,28 @@ fn cloud_light(in: CloudOut, hit: CloudHit) -> vec4<f32> {
     return vec4<f32>(debug_tint_lod(c, in.world, TECHNIQUE_BILLBOARD_CLOUD, cloud_level(in.plane)), 1.0);
 }
 
+// A box pixel: its colour and the depth of the point it shows (the box's own depth is not the
+// leaf's, so leaves of crossing planes and the wood occlude each other where they lie).
+struct CloudFragment {
+    @location(0) color: vec4<f32>,
+    @builtin(frag_depth) depth: f32,
+};
+
 @fragment
-fn fs_cloud(in: CloudOut) -> @location(0) vec4<f32> {
+fn fs_cloud(in: CloudOut) -> CloudFragment {
     let hit = evaluate(in, true, true);
     if (hit.kind == 0u) {
         discard;
     }
-    return cloud_light(in, hit);
+    var lit = in;
+    lit.world = hit_world(in, hit);
+    var out: CloudFragment;
+    out.color = cloud_light(lit, hit);
+    out.depth = world_depth(lit.world);
+    return out;
 }
 
+// The far cloud's boxes are flat: the drawn point is the point shown.
 @fragment
 fn fs_cloud_lowres(in: CloudOut) -> @location(0) vec4<f32> {
     let hit = evaluate(in, true, false);
@@ -275,12 +373,20 @@ fn fs_cloud_lowres(in: CloudOut) -> @location(0) vec4<f32> {
     return cloud_light(in, hit);
 }
 
+// How far a shadow caster's depth is pushed away from the sun (metres): the pipeline's depth
+// bias does not apply to a written depth.
+const SHADOW_PUSH: f32 = 0.03;
+
 @fragment
-fn fs_cloud_shadow(in: CloudOut) -> @location(0) vec4<f32> {
-    if (evaluate(in, false, true).kind == 0u) {
+fn fs_cloud_shadow(in: CloudOut) -> CloudFragment {
+    let hit = evaluate(in, false, true);
+    if (hit.kind == 0u) {
         discard;
     }
-    return opaque_caster();
+    var out: CloudFragment;
+    out.color = opaque_caster();
+    out.depth = world_depth(hit_world(in, hit) - frame.sun_dir.xyz * SHADOW_PUSH);
+    return out;
 }
 
 @fragment

@@ -13,6 +13,8 @@ struct CloudPlane {
     n: vec4<f32>,
     // x, y: cells along u, v; z: first cell; w: rectangle size along v (f32 bits).
     grid: vec4<u32>,
+    // x, y: the lowest and highest height of the plane's leaves above it (its slab).
+    slab: vec4<f32>,
 };
 
 // A leaf (`LeafRecord` in `layers.rs`, 64 bytes): in plane space (s, t, height) the leaf

@@ -28,15 +28,23 @@ pub const LEVELS: usize = 3;
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct CloudVertex {
     position: [f32; 3],
-    st: [f32; 2],
+    /// Plane space: `s`, `t`, height above the plane.
+    pst: [f32; 3],
     plane: u32,
+    /// The block's rectangle: min `s`, min `t`, max `s`, max `t`.
+    block: [f32; 4],
 }
 
 impl CloudVertex {
     const LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
         array_stride: std::mem::size_of::<CloudVertex>() as u64,
         step_mode: wgpu::VertexStepMode::Vertex,
-        attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x2, 2 => Uint32],
+        attributes: &wgpu::vertex_attr_array![
+            0 => Float32x3,
+            1 => Float32x3,
+            2 => Uint32,
+            3 => Float32x4
+        ],
     };
 }
 
@@ -167,6 +175,73 @@ fn occupied_rects(c: &layers::Cloud, p: &PlaneRecord) -> Vec<(Vec2, Vec2)> {
     out
 }
 
+/// The box of one block `[lo, hi]` of plane `r` (number `plane` in the plane table): its
+/// rectangle × the plane's slab, six faces wound counter-clockwise seen from outside (the
+/// pipelines draw the inside faces); a flat slab (the far cloud) gives its two faces only.
+fn block_box(
+    r: &PlaneRecord,
+    plane: u32,
+    lo: Vec2,
+    hi: Vec2,
+    vertices: &mut Vec<CloudVertex>,
+    indices: &mut Vec<u32>,
+) {
+    let (o, u, v, n) = (
+        Vec3::from_slice(&r.origin_cell[..3]),
+        Vec3::from_slice(&r.u[..3]),
+        Vec3::from_slice(&r.v[..3]),
+        Vec3::from_slice(&r.n[..3]),
+    );
+    let (h0, h1) = r.heights();
+    let block = [lo.x, lo.y, hi.x, hi.y];
+    let corner = |i: u32| {
+        Vec3::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { h0 } else { h1 },
+        )
+    };
+    let base = vertices.len() as u32;
+    for i in 0..8 {
+        let p = corner(i);
+        vertices.push(CloudVertex {
+            position: (o + u * p.x + v * p.y + n * p.z).to_array(),
+            pst: p.to_array(),
+            plane,
+            block,
+        });
+    }
+    // Faces as corner numbers, with their outward direction (plane space).
+    let faces: [([u32; 4], Vec3); 6] = [
+        ([4, 5, 7, 6], Vec3::Z),
+        ([0, 2, 3, 1], -Vec3::Z),
+        ([0, 1, 5, 4], -Vec3::Y),
+        ([2, 6, 7, 3], Vec3::Y),
+        ([0, 4, 6, 2], -Vec3::X),
+        ([1, 3, 7, 5], Vec3::X),
+    ];
+    let flat = h1 <= h0;
+    for (k, (f, out)) in faces.iter().enumerate() {
+        if flat && k >= 2 {
+            break;
+        }
+        // Counter-clockwise seen from outside in model space (the plane's axes may be either
+        // handed).
+        let m = |i: u32| {
+            let p = corner(i);
+            o + u * p.x + v * p.y + n * p.z
+        };
+        let outward = u * out.x + v * out.y + n * out.z;
+        let winding = (m(f[1]) - m(f[0])).cross(m(f[2]) - m(f[0])).dot(outward);
+        let f = if winding >= 0.0 {
+            *f
+        } else {
+            [f[0], f[3], f[2], f[1]]
+        };
+        indices.extend([0, 1, 2, 0, 2, 3].map(|i| base + f[i]));
+    }
+}
+
 impl BillboardCloud {
     /// Uploads every species' clouds and builds the pipelines.
     pub fn new(
@@ -196,7 +271,7 @@ impl BillboardCloud {
                 "billboard-cloud bakes with different tile sizes — re-bake".into(),
             ));
         }
-        let mut gplanes: Vec<[u32; 24]> = Vec::new();
+        let mut gplanes: Vec<[u32; 28]> = Vec::new();
         let (mut cells, mut lists, mut records) = (Vec::new(), Vec::new(), Vec::new());
         let mut vertices: Vec<CloudVertex> = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
@@ -222,31 +297,13 @@ impl BillboardCloud {
                     tiles.push(&c.lowres[2 * p + 1]);
                     let mut r: PlaneRecord = *rec;
                     r.grid[2] += cell_offset;
-                    let mut raw = [0u32; 24];
-                    raw[..20].copy_from_slice(bytemuck::cast_slice(std::slice::from_ref(&r)));
-                    raw[20..].copy_from_slice(&[
-                        record_offset,
-                        pair,
-                        list_offset,
-                        c.parallax.to_bits(),
-                    ]);
+                    let mut raw = [0u32; 28];
+                    raw[..24].copy_from_slice(bytemuck::cast_slice(std::slice::from_ref(&r)));
+                    raw[24..].copy_from_slice(&[record_offset, pair, list_offset, 0]);
                     let global = gplanes.len() as u32;
                     gplanes.push(raw);
-                    let (o, u, v) = (
-                        Vec3::from_slice(&r.origin_cell[..3]),
-                        Vec3::from_slice(&r.u[..3]),
-                        Vec3::from_slice(&r.v[..3]),
-                    );
                     for (lo, hi) in occupied_rects(c, rec) {
-                        let base = vertices.len() as u32;
-                        for st in [lo, Vec2::new(hi.x, lo.y), hi, Vec2::new(lo.x, hi.y)] {
-                            vertices.push(CloudVertex {
-                                position: (o + u * st.x + v * st.y).to_array(),
-                                st: st.to_array(),
-                                plane: global,
-                            });
-                        }
-                        indices.extend([0, 1, 2, 0, 2, 3].map(|i| base + i));
+                        block_box(&r, global, lo, hi, &mut vertices, &mut indices);
                     }
                 }
                 cells.extend_from_slice(&c.cells);
@@ -335,13 +392,13 @@ impl BillboardCloud {
         };
         let device = &gpu.device;
         let storage = |label, contents: &[u8]| common::storage_buffer(gpu, label, contents);
-        let plane_main: Vec<[u32; 20]> = gplanes
+        let plane_main: Vec<[u32; 24]> = gplanes
             .iter()
-            .map(|p| p[..20].try_into().expect("20 words"))
+            .map(|p| p[..24].try_into().expect("24 words"))
             .collect();
         let plane_extra: Vec<[u32; 4]> = gplanes
             .iter()
-            .map(|p| p[20..].try_into().expect("4 words"))
+            .map(|p| p[24..].try_into().expect("4 words"))
             .collect();
         let planes_buf = storage("bcloud_planes", bytemuck::cast_slice(&plane_main));
         let extra_buf = storage("bcloud_plane_extra", bytemuck::cast_slice(&plane_extra));
@@ -416,7 +473,9 @@ impl BillboardCloud {
                     buffers: &buffers,
                     pass,
                     target: &frame.target,
-                    cull: None,
+                    // Each box's inside faces: one fragment per pixel, also with the eye
+                    // inside the box.
+                    cull: Some(wgpu::Face::Front),
                     depth_write: true,
                     blend: None,
                 },

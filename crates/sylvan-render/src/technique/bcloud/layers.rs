@@ -10,24 +10,25 @@
 //!   leaf) fragment; here a list entry is a 4-byte record number and the 64-byte record is
 //!   stored once per leaf: the same walk with one more indirection and several times less
 //!   memory (a leaf overlaps several cells).
-//! - **The leaf where the view ray meets it, not its image on the plane.** GPSS07 draws each
-//!   leaf as an image placed on the billboard (picked by an orientation index), so a leaf off
-//!   its plane or turned away from it is displaced and re-shaped with the view, which no
-//!   texture resolution recovers (measured: 3.3× 1-spp geometry's ꟻLIP at 800 px). Here each
-//!   record holds the leaf's own plane — the affine image of its texture that fits its
-//!   vertices best (least squares, exact for a flat leaf) — and the walk intersects the pixel's
-//!   ray with it ([`leaf_uv`]): leaves keep their positions, sizes, orientations and overlaps
-//!   from every side, and one leaf image serves every leaf. Rays steeper than `parallax` (the
-//!   tangent of their angle to the plane's normal) are bent to that slope ([`parallax_ray`]),
-//!   which bounds how far a leaf's fragments spread over the plane.
+//! - **The leaf where the view ray meets it, in a slab.** GPSS07 draws each leaf as an image
+//!   placed on the billboard (picked by an orientation index), so a leaf off its plane or
+//!   turned away from it is displaced and re-shaped with the view, which no texture resolution
+//!   recovers (measured: 3.3× 1-spp geometry's ꟻLIP at 800 px). Here each record holds the
+//!   leaf's own plane — the affine image of its texture that fits its vertices best (least
+//!   squares, exact for a flat leaf) — and each plane is drawn as the box of its leaves (its
+//!   rectangle × the heights they span, [`PlaneRecord::slab`]): a pixel's ray is followed
+//!   through the box cell by cell of the hash grid ([`walk`]), and in each cell meets the
+//!   leaves of its list where they lie ([`leaf_hit`]). Leaves keep their positions, sizes,
+//!   orientations and overlaps from every side, a plane seen edge-on still covers the screen
+//!   its leaves cover, and one leaf image serves every leaf. A ray crossing more than
+//!   [`MAX_CELLS`] cells (a plane seen almost edge-on) stops there.
 //! - **Fragments from the leaves' triangles.** GPSS07 splats each leaf as a point sprite of its
 //!   bounding square and depth-peels the sprites; a cell here lists the leaves whose fitted
-//!   triangles, projected onto the plane and widened by `parallax` × their height above it,
-//!   overlap it (exact 2D separating-axis test, [`leaf_cells`]), so no ray within the
-//!   `parallax` cone meets a leaf its cell does not list. The rectangle grows by the same
-//!   reach. The order is the height of the leaf's centre above the plane, descending (ties by
-//!   leaf number): front to back from the plane's front side, back to front read from its
-//!   other end.
+//!   triangles, projected onto the plane, overlap it (exact 2D separating-axis test,
+//!   [`leaf_cells`]): a ray meets a leaf only in a cell that lists it. The order is the height
+//!   of the leaf's centre above the plane, descending (ties by leaf number); the walk takes the
+//!   nearest opaque hit of the cell, so the order only decides which leaves the 255-entry cap
+//!   drops.
 //! - **Ambient occlusion per vertex is the reference's** (`crown_occlusion` of
 //!   `shaders/frame.wgsl`, the term `geometry` shades every leaf vertex with), extrapolated to
 //!   the leaf's box corners by least squares (fig. 11), so the technique matches the ground
@@ -89,7 +90,7 @@ impl LeafRecord {
     }
 }
 
-/// A plane as the shader reads it (80 bytes).
+/// A plane as the shader reads it (96 bytes).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
 pub struct PlaneRecord {
@@ -103,6 +104,9 @@ pub struct PlaneRecord {
     pub n: [f32; 4],
     /// Cells along `u`, along `v`, first cell, rectangle size along `v` (bits of an f32).
     pub grid: [u32; 4],
+    /// The slab the plane's leaves lie in: lowest and highest height above the plane (x, y;
+    /// both 0 for a cloud drawn from its low-resolution tiles only), zeros.
+    pub slab: [f32; 4],
 }
 
 impl PlaneRecord {
@@ -125,6 +129,19 @@ impl PlaneRecord {
         (
             (c.x.max(0.0) as u32).min(nx - 1),
             (c.y.max(0.0) as u32).min(ny - 1),
+        )
+    }
+    /// The slab's lowest and highest height above the plane.
+    pub fn heights(&self) -> (f32, f32) {
+        (self.slab[0], self.slab[1])
+    }
+    /// Plane-space coordinates (`s`, `t`, height) of a model-space point.
+    pub fn to_plane(&self, p: Vec3) -> Vec3 {
+        let d = p - Vec3::from_slice(&self.origin_cell[..3]);
+        Vec3::new(
+            d.dot(Vec3::from_slice(&self.u[..3])),
+            d.dot(Vec3::from_slice(&self.v[..3])),
+            d.dot(Vec3::from_slice(&self.n[..3])),
         )
     }
     /// Plane coordinates of a model-space point.
@@ -158,9 +175,6 @@ pub struct Cloud {
     /// Whether the shader walks this cloud's lists (the farthest cloud keeps only its
     /// low-resolution tiles: `cells`, `lists` and `records` are empty).
     pub layered: bool,
-    /// Steepest ray the lists hold every leaf for: the tangent of its angle to the planes'
-    /// normal ([`parallax_ray`]).
-    pub parallax: f32,
 }
 
 impl Cloud {
@@ -393,20 +407,6 @@ pub fn leaf_point(rec: &LeafRecord, uv: Vec2) -> Vec3 {
     Vec3::from(rec.origin) + tu * c.x + tv * c.y
 }
 
-/// The ray direction (plane space, towards the viewer) a pixel of a plane walks with:
-/// `to_eye` bent, where it is steeper than `parallax` (the tangent of its angle to the
-/// normal), to that angle — the lists hold every leaf such a ray can meet, so nothing is
-/// missed; beyond, leaves move less than they should (the shader's `parallax_ray`).
-pub fn parallax_ray(to_eye: Vec3, parallax: f32) -> Vec3 {
-    let side = to_eye.truncate().length();
-    let limit = parallax * to_eye.z.abs();
-    if side > limit {
-        (to_eye.truncate() * (limit / side)).extend(to_eye.z)
-    } else {
-        to_eye
-    }
-}
-
 /// Whether triangle `t` (2D) overlaps the box `[lo, hi]` (separating axes: the box's two and
 /// the triangle's three edge normals). Touching counts as overlapping.
 pub fn triangle_overlaps_box(t: [Vec2; 3], lo: Vec2, hi: Vec2) -> bool {
@@ -471,53 +471,142 @@ pub struct Hit {
     pub uv: Vec2,
 }
 
-/// Where the ray through plane point `st` along `ray` (plane space, [`parallax_ray`]) meets
-/// the leaf of `rec`: its image coordinates, if inside its box.
-pub fn leaf_uv(rec: &LeafRecord, st: Vec2, ray: Vec3) -> Option<Vec2> {
+/// Where the ray `o + λ d` (plane space) meets the fitted leaf of `rec`: `λ` and the leaf
+/// image coordinates, if inside its box.
+pub fn leaf_hit(rec: &LeafRecord, o: Vec3, d: Vec3) -> Option<(f32, Vec2)> {
     let (tu, tv) = (Vec3::from(rec.to_u), Vec3::from(rec.to_v));
     let m = tu.cross(tv);
-    let me = m.dot(ray);
-    if me.abs() <= 1e-6 * m.length() * ray.length() || me == 0.0 {
+    let md = m.dot(d);
+    if md.abs() <= 1e-6 * m.length() * d.length() || md == 0.0 {
         return None;
     }
-    let w = st.extend(0.0) - Vec3::from(rec.origin);
-    let x = w - ray * (m.dot(w) / me);
+    let w = o - Vec3::from(rec.origin);
+    let lambda = -m.dot(w) / md;
+    let x = w + d * lambda;
     let uv = Vec2::new(tu.dot(x), tv.dot(x));
     let (lo, hi) = rec.uv_box();
-    (uv.cmpge(lo).all() && uv.cmple(hi).all()).then_some(uv)
+    (uv.cmpge(lo).all() && uv.cmple(hi).all()).then_some((lambda, uv))
 }
 
-/// The CPU twin of the fragment shader's walk (§5, fig. 7): the first entry of the cell's
-/// list whose leaf image is opaque (alpha ≥ 0.5) where the ray through `st` towards `to_eye`
-/// (plane space; bent by [`parallax_ray`]) meets it — from the front of the list when the ray
-/// leaves the plane's front side, from the back end otherwise.
-pub fn walk(cloud: &Cloud, plant: &Plant, plane: usize, st: Vec2, to_eye: Vec3) -> Option<Hit> {
-    let p = &cloud.planes[plane];
-    let (cx, cy) = p.cell_of(st);
-    let list = cloud.list(plane, cx, cy);
-    let ray = parallax_ray(to_eye, cloud.parallax);
-    let mut visit = |&r: &u32| {
-        let rec = &cloud.records[r as usize];
-        let uv = leaf_uv(rec, st, ray)?;
-        (sample(&plant.leaf_texture, uv)[3] >= 0.5).then_some(Hit { record: r, uv })
-    };
-    if to_eye.z >= 0.0 {
-        list.iter().find_map(&mut visit)
-    } else {
-        list.iter().rev().find_map(&mut visit)
+/// Most cells one ray walks through a plane's slab (the shader's `MAX_CELLS`): a ray that
+/// would cross more (a plane seen almost edge-on) stops there.
+pub const MAX_CELLS: u32 = 64;
+
+/// The span `[λ0, λ1]` of the ray `o + λ d` (plane space) inside the box `[lo, hi]` (3D), if
+/// it meets it.
+pub fn ray_box(o: Vec3, d: Vec3, lo: Vec3, hi: Vec3) -> Option<(f32, f32)> {
+    let (mut t0, mut t1) = (f32::MIN, f32::MAX);
+    for k in 0..3 {
+        if d[k].abs() < 1e-12 {
+            if o[k] < lo[k] || o[k] > hi[k] {
+                return None;
+            }
+            continue;
+        }
+        let (a, b) = ((lo[k] - o[k]) / d[k], (hi[k] - o[k]) / d[k]);
+        t0 = t0.max(a.min(b));
+        t1 = t1.min(a.max(b));
     }
+    (t0 <= t1).then_some((t0, t1))
 }
 
-/// The cells of a `nx` × `ny` grid of `cell` metres from `min` that the ray bent by
-/// [`parallax_ray`] can see the fitted leaf of `rec` through: its triangles `tris` (image
-/// coordinates) placed by the fit, projected onto the plane and widened by `parallax` × their
-/// largest height (a ray of slope ≤ `parallax` moves a point at height `h` by at most
-/// `parallax |h|` on the plane). Appends cell numbers (with repeats) to `out`.
-#[allow(clippy::too_many_arguments)] // one grid, one leaf
+/// The CPU twin of the fragment shader's walk (§5, fig. 7, through a slab): along the ray
+/// `o + λ d` (plane space, `d` away from the viewer, `λ ≥ λ_min`) inside the plane's slab, cell
+/// after cell of the hash grid the ray crosses, nearest first (at most [`MAX_CELLS`]), the
+/// nearest leaf of the cell's list whose image is opaque (alpha ≥ 0.5) where the ray meets it
+/// inside that cell.
+pub fn walk(cloud: &Cloud, plant: &Plant, plane: usize, o: Vec3, d: Vec3) -> Option<Hit> {
+    walk_from(cloud, plant, plane, o, d, f32::MIN)
+}
+
+/// [`walk`] from `λ_min` on (the viewer's own position on the ray).
+pub fn walk_from(
+    cloud: &Cloud,
+    plant: &Plant,
+    plane: usize,
+    o: Vec3,
+    d: Vec3,
+    lambda_min: f32,
+) -> Option<Hit> {
+    let p = &cloud.planes[plane];
+    let (min, size) = (p.min(), p.size());
+    let (h0, h1) = p.heights();
+    let (t0, t1) = ray_box(o, d, min.extend(h0), (min + size).extend(h1))?;
+    let t0 = t0.max(lambda_min);
+    if t0 > t1 {
+        return None;
+    }
+    let cm = p.origin_cell[3];
+    let (nx, ny) = p.cells();
+    let start = (o + d * t0).truncate();
+    let mut c = ((start - min) / cm).floor();
+    c = c.clamp(Vec2::ZERO, Vec2::new(nx as f32 - 1.0, ny as f32 - 1.0));
+    let step = Vec2::new(d.x.signum(), d.y.signum());
+    // λ at which the ray crosses the cell's next x and y boundaries.
+    let next = |c: Vec2| {
+        let edge = min + (c + step.max(Vec2::ZERO)) * cm;
+        Vec2::new(
+            if d.x == 0.0 {
+                f32::MAX
+            } else {
+                (edge.x - o.x) / d.x
+            },
+            if d.y == 0.0 {
+                f32::MAX
+            } else {
+                (edge.y - o.y) / d.y
+            },
+        )
+    };
+    let mut enter = t0;
+    for _ in 0..MAX_CELLS {
+        let tn = next(c);
+        let exit = tn.x.min(tn.y).min(t1);
+        let list = cloud.list(plane, c.x as u32, c.y as u32);
+        let eps = 1e-4 * cm;
+        let mut best: Option<(f32, Hit)> = None;
+        for &r in list {
+            let rec = &cloud.records[r as usize];
+            let Some((lambda, uv)) = leaf_hit(rec, o, d) else {
+                continue;
+            };
+            if lambda < enter - eps
+                || lambda > exit + eps
+                || best.as_ref().is_some_and(|b| b.0 <= lambda)
+            {
+                continue;
+            }
+            if sample(&plant.leaf_texture, uv)[3] >= 0.5 {
+                best = Some((lambda, Hit { record: r, uv }));
+            }
+        }
+        if let Some((_, hit)) = best {
+            return Some(hit);
+        }
+        if exit >= t1 {
+            return None;
+        }
+        if tn.x <= tn.y {
+            c.x += step.x;
+        } else {
+            c.y += step.y;
+        }
+        if c.x < 0.0 || c.y < 0.0 || c.x >= nx as f32 || c.y >= ny as f32 {
+            return None;
+        }
+        enter = exit;
+    }
+    None
+}
+
+/// The cells of a `nx` × `ny` grid of `cell` metres from `min` that the fitted leaf of `rec`
+/// covers seen along the plane's normal: its triangles `tris` (image coordinates) placed by the
+/// fit and projected onto the plane (a ray through the slab meets the leaf at a point of that
+/// projection, so the cell holding the point lists it). Appends cell numbers (with repeats) to
+/// `out`.
 pub fn leaf_cells(
     rec: &LeafRecord,
     tris: &[[Vec2; 3]],
-    parallax: f32,
     min: Vec2,
     cell: f32,
     (nx, ny): (u32, u32),
@@ -528,11 +617,9 @@ pub fn leaf_cells(
         return;
     }
     for t in tris {
-        let p = t.map(|uv| leaf_point(rec, uv));
-        let reach = parallax * p.iter().map(|x| x.z.abs()).fold(0.0, f32::max);
-        let tri = p.map(|x| x.truncate());
-        let lo = (tri[0].min(tri[1]).min(tri[2]) - Vec2::splat(reach) - min) / cell;
-        let hi = (tri[0].max(tri[1]).max(tri[2]) + Vec2::splat(reach) - min) / cell;
+        let tri = t.map(|uv| leaf_point(rec, uv).truncate());
+        let lo = (tri[0].min(tri[1]).min(tri[2]) - min) / cell;
+        let hi = (tri[0].max(tri[1]).max(tri[2]) - min) / cell;
         if hi.x < 0.0 || hi.y < 0.0 {
             continue;
         }
@@ -542,8 +629,7 @@ pub fn leaf_cells(
         for cy in y0..=y1 {
             for cx in x0..=x1 {
                 let clo = min + Vec2::new(cx as f32, cy as f32) * cell;
-                let chi = clo + Vec2::splat(cell);
-                if triangle_overlaps_box(tri, clo - Vec2::splat(reach), chi + Vec2::splat(reach)) {
+                if triangle_overlaps_box(tri, clo, clo + Vec2::splat(cell)) {
                     out.push(cy * nx + cx);
                 }
             }
@@ -562,8 +648,6 @@ pub struct CloudSpec {
     pub supersample: u32,
     /// Keep the lists for the shader (else only the low-resolution tiles).
     pub layered: bool,
-    /// Steepest ray (tangent of its angle to a plane's normal) the lists are built for.
-    pub parallax: f32,
 }
 
 /// Builds one cloud from clustered planes.
@@ -574,7 +658,6 @@ pub fn build(
     spec: CloudSpec,
 ) -> Result<Cloud, String> {
     let m = &plant.leaves;
-    let parallax = if spec.layered { spec.parallax } else { 0.0 };
     let mut records = vec![LeafRecord::zeroed(); leaves.len()];
     // Each leaf's triangles in image coordinates.
     let uv_tris = |leaf: &Leaf| -> Vec<[Vec2; 3]> {
@@ -583,11 +666,12 @@ pub fn build(
             .map(|t| [t[0], t[1], t[2]].map(|i| Vec2::from(m.uvs[i as usize])))
             .collect()
     };
-    // The rectangles: every place a listed ray can meet a leaf of the plane (the fitted
-    // leaves, widened by their reach).
+    // The slabs: the box of the plane's fitted leaves (plane space).
     let mut rects = Vec::with_capacity(planes.len());
+    let mut slabs = Vec::with_capacity(planes.len());
     for plane in planes {
         let (mut lo, mut hi) = (Vec2::splat(f32::MAX), Vec2::splat(f32::MIN));
+        let (mut h0, mut h1) = (0.0f32, 0.0f32);
         for &l in &plane.leaves {
             let leaf = &leaves[l as usize];
             let rec = record(plant, leaf, plane);
@@ -599,9 +683,9 @@ pub fn build(
             for t in uv_tris(leaf) {
                 for uv in t {
                     let x = leaf_point(&rec, uv);
-                    let reach = Vec2::splat(parallax * x.z.abs());
-                    lo = lo.min(x.truncate() - reach);
-                    hi = hi.max(x.truncate() + reach);
+                    lo = lo.min(x.truncate());
+                    hi = hi.max(x.truncate());
+                    (h0, h1) = (h0.min(x.z), h1.max(x.z));
                 }
             }
         }
@@ -610,6 +694,7 @@ pub fn build(
         }
         // A rectangle of some width even for a single edge-on leaf.
         rects.push((lo - Vec2::splat(1e-3), hi + Vec2::splat(1e-3)));
+        slabs.push([h0 - 1e-3, h1 + 1e-3, 0.0, 0.0]);
     }
     let area: f32 = rects
         .iter()
@@ -620,7 +705,7 @@ pub fn build(
     let mut cells: Vec<u32> = Vec::new();
     let mut lists: Vec<u32> = Vec::new();
     let mut members = Vec::with_capacity(planes.len());
-    for (plane, &(min, max)) in planes.iter().zip(&rects) {
+    for ((plane, &(min, max)), &slab) in planes.iter().zip(&rects).zip(&slabs) {
         let size = max - min;
         let cm = cell_m
             .max(size.x / MAX_CELLS_PER_SIDE as f32)
@@ -633,6 +718,7 @@ pub fn build(
             v: plane.v.extend(min.y).to_array(),
             n: plane.normal.extend(size.x).to_array(),
             grid: [nx, ny, cells.len() as u32, size.y.to_bits()],
+            slab,
         };
         // Per cell: (height at the centre, record).
         let mut per_cell: Vec<Vec<(f32, u32)>> = vec![Vec::new(); (nx * ny) as usize];
@@ -645,7 +731,6 @@ pub fn build(
             leaf_cells(
                 &records[l as usize],
                 &uv_tris(leaf),
-                parallax,
                 min,
                 cm,
                 (nx, ny),
@@ -686,7 +771,6 @@ pub fn build(
         tile: spec.tile,
         lowres: Vec::new(),
         layered: spec.layered,
-        parallax,
     };
     cloud.lowres = (0..cloud.planes.len())
         .flat_map(|p| [true, false].map(|front| (p, front)))
@@ -696,6 +780,10 @@ pub fn build(
         cloud.cells.clear();
         cloud.lists.clear();
         cloud.records.clear();
+        // Drawn flat, from its tiles.
+        for p in &mut cloud.planes {
+            p.slab = [0.0; 4];
+        }
     }
     Ok(cloud)
 }
@@ -713,8 +801,8 @@ fn lowres_tile(
 ) -> TileImage {
     let p = &cloud.planes[plane];
     let n_plane = Vec3::from_slice(&p.n[..3]) * if front { 1.0 } else { -1.0 };
-    // Seen straight on (plane space).
-    let side = Vec3::Z * if front { 1.0 } else { -1.0 };
+    // Seen straight on (plane space), away from the viewer.
+    let down = Vec3::Z * if front { -1.0 } else { 1.0 };
     let (size, ss) = (spec.tile as usize, spec.supersample.max(1) as usize);
     let inv = 1.0 / (ss * ss) as f32;
     let mut color = vec![[0.0f32; 4]; size * size];
@@ -736,7 +824,7 @@ fn lowres_tile(
                         (y as f32 + (sy as f32 + 0.5) / ss as f32) / size as f32,
                     );
                     let st = min + f * ext;
-                    let Some(hit) = walk(cloud, plant, plane, st, side) else {
+                    let Some(hit) = walk(cloud, plant, plane, st.extend(0.0), down) else {
                         continue;
                     };
                     let rec = &cloud.records[hit.record as usize];

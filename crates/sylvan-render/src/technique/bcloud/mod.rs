@@ -94,10 +94,6 @@ pub struct BillboardCloudBakeParams {
     pub supersample: u32,
     /// Clustering refinements.
     pub iterations: u32,
-    /// Steepest view ray, as the tangent of its angle to a plane's normal, for which leaves are
-    /// drawn exactly where they lie off their plane; steeper rays are bent to it (leaves then
-    /// move less than they should). Lists and rectangles widen with it.
-    pub parallax: f32,
 }
 
 impl Default for BillboardCloudBakeParams {
@@ -110,7 +106,6 @@ impl Default for BillboardCloudBakeParams {
             tile: 16,
             supersample: 4,
             iterations: 10,
-            parallax: 4.0,
         }
     }
 }
@@ -152,11 +147,6 @@ impl ParamTable for BillboardCloudBakeParams {
             unit: "iterations",
             doc: "clustering refinements (0–100)",
         },
-        ParamDoc {
-            key: "parallax",
-            unit: "slope",
-            doc: "steepest view ray (tangent of its angle to a plane's normal) that sees leaves exactly where they lie off their plane; lists and rectangles widen with it (0–8)",
-        },
     ];
 
     fn validate(&self) -> Result<(), String> {
@@ -180,12 +170,6 @@ impl ParamTable for BillboardCloudBakeParams {
         }
         range("supersample", self.supersample, 1, 8)?;
         range("iterations", self.iterations, 0, 100)?;
-        if !(0.0..=8.0).contains(&self.parallax) {
-            return Err(format!(
-                "billboard-cloud parallax {}: must be 0 to 8",
-                self.parallax
-            ));
-        }
         Ok(())
     }
 }
