@@ -4,13 +4,19 @@
 
 // A corner of the box drawn for one block of a plane's cells (its back faces are drawn).
 struct CloudIn {
-    @location(0) position: vec3<f32>,
     // Plane space: s, t and the height above the plane.
-    @location(1) pst: vec3<f32>,
-    @location(2) plane: u32,
-    // The block's rectangle (plane space: min s, min t, max s, max t).
-    @location(3) block: vec4<f32>,
+    @location(0) pst: vec3<f32>,
+    @location(1) plane: u32,
+    // The block's box (plane space): lowest and highest corner.
+    @location(2) block_lo: vec3<f32>,
+    @location(3) block_hi: vec3<f32>,
 };
+
+// A box corner in model space.
+fn cloud_position(v: CloudIn) -> vec3<f32> {
+    let p = planes[v.plane];
+    return p.origin_cell.xyz + p.u.xyz * v.pst.x + p.v.xyz * v.pst.y + p.n.xyz * v.pst.z;
+}
 
 struct CloudOut {
     @builtin(position) pos: vec4<f32>,
@@ -24,7 +30,8 @@ struct CloudOut {
     // x: presence; y: 1 where this cloud is the farther side of its cross-fade; z: the
     // instance's scale (plant units to metres).
     @location(5) @interpolate(flat) keep: vec3<f32>,
-    @location(6) @interpolate(flat) block: vec4<f32>,
+    @location(6) @interpolate(flat) block_lo: vec3<f32>,
+    @location(7) @interpolate(flat) block_hi: vec3<f32>,
 };
 
 // A plane with what the upload adds (`GpuPlane` in `draw.rs`): x first record of its
@@ -45,12 +52,13 @@ fn cloud_level(plane: u32) -> u32 {
 }
 
 fn cloud_vertex(v: CloudIn, inst: TreeInstance, to_eye_model: vec3<f32>) -> CloudOut {
-    let world = instance_to_world(v.position, inst.base_scale, inst.rot);
+    let world = instance_to_world(cloud_position(v), inst.base_scale, inst.rot);
     var out: CloudOut;
     out.pos = frame.view_proj * vec4<f32>(world, 1.0);
     out.world = world;
     out.pst = v.pst;
-    out.block = v.block;
+    out.block_lo = v.block_lo;
+    out.block_hi = v.block_hi;
     out.to_eye = to_eye_model;
     out.plane = v.plane;
     out.rot = inst.rot;
@@ -63,7 +71,7 @@ fn cloud_vertex(v: CloudIn, inst: TreeInstance, to_eye_model: vec3<f32>) -> Clou
 @vertex
 fn vs_cloud(v: CloudIn, inst: TreeInstance) -> CloudOut {
     let eye = instance_to_model(frame.camera.xyz, inst.base_scale, inst.rot);
-    return cloud_vertex(v, inst, eye - v.position);
+    return cloud_vertex(v, inst, eye - cloud_position(v));
 }
 
 @vertex
@@ -174,9 +182,8 @@ fn evaluate(in: CloudOut, shade: bool, layered: bool) -> CloudHit {
     let gy = gy0 - d * dot(gy0, d);
     let rmin = vec2<f32>(p.u.w, p.v.w);
     let size = vec2<f32>(p.n.w, bitcast<f32>(p.grid.w));
-    let slab = p.slab;
     // The ray enters the block's box at `q` (or starts at the eye) and leaves it `span` later.
-    let box = ray_box(in.pst, d, vec3<f32>(in.block.xy, slab.x), vec3<f32>(in.block.zw, slab.y));
+    let box = ray_box(in.pst, d, in.block_lo, in.block_hi);
     let back_in = max(box.x, -eye_dist);
     let q = in.pst + d * back_in;
     let span = max(box.y - back_in, 0.0);

@@ -6,9 +6,7 @@
 //! times more than spread along it, so clusters come out thin and flat), its squared distance
 //! from the cluster's centre along the plane (so a plane's rectangle stays small: billboards
 //! are not infinite planes) and a term for the leaf standing edge-on to the plane
-//! ([`EDGE_ON_WEIGHT`]: a leaf is drawn where the view ray meets it, but a leaf turned away
-//! from its plane is seen face-on where the plane is seen at a grazing angle, and a plane
-//! cannot cover more of the screen than its own rectangle does). A cluster's plane is the
+//! ([`EDGE_ON_WEIGHT`]: leaves turned like their plane keep its slab thin). A cluster's plane is the
 //! least-squares plane of its leaves' vertices (smallest principal axis), or the mean leaf
 //! normal where the leaves do not span a plane. Seeds are farthest-point samples (deterministic); an emptied cluster is
 //! re-seeded at the worst-fitting leaf. Every leaf belongs to exactly one plane.
@@ -24,11 +22,11 @@ use sylvan_plant::Plant;
 /// crown, so their rectangles — the fill — grow: 4000 kept).
 pub const NORMAL_WEIGHT: f32 = 4000.0;
 /// Weight of a leaf standing edge-on to its plane (× the leaf's squared size × (1 − |cos|) of
-/// the angle between their normals). A leaf is drawn where the view ray meets it
-/// (`layers::leaf_uv`), but only inside its plane's screen footprint: a leaf face-on to the
-/// eye on a plane seen edge-on shrinks to a sliver. Measured on one chestnut (ꟻLIP vs 16-spp
-/// geometry, 900×900, parallax 2; at 800 / 400 px): 0 → 0.131 / 0.113, 1000 → 0.127 / 0.107,
-/// 5000 → 0.122 / 0.101, 20000 → 0.124 / 0.100 (5000 kept).
+/// the angle between their normals). Measured on one chestnut (ꟻLIP vs 16-spp geometry,
+/// 900×900, at 800 / 400 px) when planes were drawn flat (a leaf face-on to the eye on a plane
+/// seen edge-on then shrank to a sliver): 0 → 0.131 / 0.113, 1000 → 0.127 / 0.107, 5000 →
+/// 0.122 / 0.101, 20000 → 0.124 / 0.100 (5000 kept; planes are now drawn as slabs, which
+/// removed the slivers, and it was not measured again).
 pub const EDGE_ON_WEIGHT: f32 = 5000.0;
 
 /// One leaf of the plant: its triangles and their summary.

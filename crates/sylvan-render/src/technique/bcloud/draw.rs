@@ -27,12 +27,12 @@ pub const LEVELS: usize = 3;
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct CloudVertex {
-    position: [f32; 3],
     /// Plane space: `s`, `t`, height above the plane.
     pst: [f32; 3],
     plane: u32,
-    /// The block's rectangle: min `s`, min `t`, max `s`, max `t`.
-    block: [f32; 4],
+    /// The block's box (plane space): its lowest and highest corner.
+    block_lo: [f32; 3],
+    block_hi: [f32; 3],
 }
 
 impl CloudVertex {
@@ -41,9 +41,9 @@ impl CloudVertex {
         step_mode: wgpu::VertexStepMode::Vertex,
         attributes: &wgpu::vertex_attr_array![
             0 => Float32x3,
-            1 => Float32x3,
-            2 => Uint32,
-            3 => Float32x4
+            1 => Uint32,
+            2 => Float32x3,
+            3 => Float32x3
         ],
     };
 }
@@ -175,14 +175,51 @@ fn occupied_rects(c: &layers::Cloud, p: &PlaneRecord) -> Vec<(Vec2, Vec2)> {
     out
 }
 
-/// The box of one block `[lo, hi]` of plane `r` (number `plane` in the plane table): its
-/// rectangle × the plane's slab, six faces wound counter-clockwise seen from outside (the
-/// pipelines draw the inside faces); a flat slab (the far cloud) gives its two faces only.
+/// The heights above plane `p` that the leaves listed in the cells of its block `[lo, hi]`
+/// span (a ray through the block meets its leaves inside them): thinner than the plane's slab
+/// where the cluster is curved. The far cloud is flat.
+fn block_heights(c: &layers::Cloud, p: &PlaneRecord, lo: Vec2, hi: Vec2) -> (f32, f32) {
+    if !c.layered {
+        return (0.0, 0.0);
+    }
+    let cm = p.origin_cell[3];
+    let (nx, ny) = p.cells();
+    let a = ((lo - p.min()) / cm).round();
+    let b = ((hi - p.min()) / cm).round();
+    let (mut h0, mut h1) = (f32::MAX, f32::MIN);
+    for cy in (a.y as u32)..(b.y as u32).min(ny) {
+        for cx in (a.x as u32)..(b.x as u32).min(nx) {
+            for &r in list_at(c, p, cx, cy) {
+                if let Some((z0, z1)) = c.records[r as usize].heights() {
+                    (h0, h1) = (h0.min(z0), h1.max(z1));
+                }
+            }
+        }
+    }
+    if h0 > h1 {
+        return (0.0, 0.0);
+    }
+    // Inside the plane's slab, with the same margin.
+    let (s0, s1) = p.heights();
+    ((h0 - 1e-3).max(s0), (h1 + 1e-3).min(s1))
+}
+
+/// The list of cell `(cx, cy)` of plane record `p` of cloud `c`.
+fn list_at<'a>(c: &'a layers::Cloud, p: &PlaneRecord, cx: u32, cy: u32) -> &'a [u32] {
+    let (nx, _) = p.cells();
+    let v = c.cells[(p.grid[2] + cy * nx + cx) as usize];
+    let (start, len) = ((v >> 8) as usize, (v & 255) as usize);
+    &c.lists[start..start + len]
+}
+
+/// The box `[lo, hi]` (plane space) of one block of plane `r` (number `plane` in the plane
+/// table), six faces wound counter-clockwise seen from outside (the pipelines draw the inside
+/// faces); a flat box (the far cloud) gives its two faces only.
 fn block_box(
     r: &PlaneRecord,
     plane: u32,
-    lo: Vec2,
-    hi: Vec2,
+    lo: Vec3,
+    hi: Vec3,
     vertices: &mut Vec<CloudVertex>,
     indices: &mut Vec<u32>,
 ) {
@@ -192,8 +229,7 @@ fn block_box(
         Vec3::from_slice(&r.v[..3]),
         Vec3::from_slice(&r.n[..3]),
     );
-    let (h0, h1) = r.heights();
-    let block = [lo.x, lo.y, hi.x, hi.y];
+    let (h0, h1) = (lo.z, hi.z);
     let corner = |i: u32| {
         Vec3::new(
             if i & 1 == 0 { lo.x } else { hi.x },
@@ -205,10 +241,10 @@ fn block_box(
     for i in 0..8 {
         let p = corner(i);
         vertices.push(CloudVertex {
-            position: (o + u * p.x + v * p.y + n * p.z).to_array(),
             pst: p.to_array(),
             plane,
-            block,
+            block_lo: lo.to_array(),
+            block_hi: hi.to_array(),
         });
     }
     // Faces as corner numbers, with their outward direction (plane space).
@@ -303,7 +339,15 @@ impl BillboardCloud {
                     let global = gplanes.len() as u32;
                     gplanes.push(raw);
                     for (lo, hi) in occupied_rects(c, rec) {
-                        block_box(&r, global, lo, hi, &mut vertices, &mut indices);
+                        let (h0, h1) = block_heights(c, rec, lo, hi);
+                        block_box(
+                            &r,
+                            global,
+                            lo.extend(h0),
+                            hi.extend(h1),
+                            &mut vertices,
+                            &mut indices,
+                        );
                     }
                 }
                 cells.extend_from_slice(&c.cells);

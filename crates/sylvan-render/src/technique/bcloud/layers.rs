@@ -88,6 +88,21 @@ impl LeafRecord {
     pub fn uv_box(&self) -> (Vec2, Vec2) {
         (unpack_unorm2(self.uv_min), unpack_unorm2(self.uv_max))
     }
+
+    /// The lowest and highest height above the plane of the fitted leaf over its `uv` box (its
+    /// corners bound the affine leaf); `None` for a leaf without area.
+    pub fn heights(&self) -> Option<(f32, f32)> {
+        let (lo, hi) = self.uv_box();
+        if lo.cmpgt(hi).any() {
+            return None;
+        }
+        let z =
+            [lo, Vec2::new(hi.x, lo.y), hi, Vec2::new(lo.x, hi.y)].map(|uv| leaf_point(self, uv).z);
+        Some((
+            z.iter().copied().fold(f32::MAX, f32::min),
+            z.iter().copied().fold(f32::MIN, f32::max),
+        ))
+    }
 }
 
 /// A plane as the shader reads it (96 bytes).

@@ -7,10 +7,10 @@
 //! fragments overlapping it sorted front to back, each entry naming a **leaf record** (where
 //! the leaf lies on the plane, its normal frame, colour and ambient occlusion), whose image is
 //! fetched from the plant's own **leaves textures** (front, back, normal map). The fragment
-//! shader (§5, fig. 7) walks the cell's list until an opaque leaf texel is found — from the
-//! other end of the list, and with the back-side image where a leaf is seen from behind, when
-//! the plane is seen from behind — so leaves keep their exact positions, shapes and overlaps
-//! however close the camera comes, at a few MB per plant.
+//! shader (§5, fig. 7) walks the cell's list until an opaque leaf texel is found, with the
+//! back-side image where a leaf is seen from behind — here through the plane's slab (below),
+//! so leaves keep their exact positions, shapes and overlaps however close the camera comes
+//! and from every side, at a few MB per plant.
 //!
 //! - **Shader LOD** (§5.1, figs. 9–10): the entries walked are `entries_per_px` × the
 //!   projected diagonal of a hash cell in pixels ([LB06], from screen derivatives); when they
@@ -26,9 +26,10 @@
 //!   diffuse transmission behind, sky × occlusion, cascaded shadows, fog) with the leaf normal
 //!   frame of the record bent by the plant's normal map; the occlusion is the reference's
 //!   per-vertex term extrapolated to the leaf's box corners by least squares (fig. 11) and
-//!   interpolated bilinearly. Shadows: the clouds cast into the shared cascades with the same
-//!   walk (its level of detail follows the shadow map's texels), the far cloud with the
-//!   low-resolution evaluation.
+//!   interpolated bilinearly, all evaluated at the point the pixel shows. Shadows: the clouds
+//!   cast into the shared cascades with the same walk (its level of detail follows the shadow
+//!   map's texels; leaf alpha at full resolution, as `geometry`'s casters), the far cloud with
+//!   the low-resolution evaluation.
 //! - **Wood**: the plant's wood mesh, drawn like `geometry`'s, and for the far cloud a
 //!   simplified mesh holding only the branches of the first `far_wood_levels` levels (the
 //!   trunk and main limbs; GPSS07 uses progressive meshes [Hop96]).
@@ -38,23 +39,28 @@
 //!
 //! Deviations (each a stated reason; see also [`layers`]): storage buffers instead of hash and
 //! list textures (the same layout, read without filtering); records per leaf with 4-byte list
-//! entries; each leaf drawn where the pixel's ray meets the leaf's own (fitted) plane instead
-//! of as an image placed on the billboard by an orientation index — GPSS07's images are
-//! displaced and re-shaped by the leaf's height above and angle to its plane, which no texture
-//! resolution recovers (rays steeper than the bake's `parallax` are bent to it, which bounds
-//! the lists); fragments from the leaves' triangles (exact overlap) instead of depth-peeled
-//! point sprites; clustering that also weighs a leaf's angle to its plane
-//! ([`cluster::EDGE_ON_WEIGHT`]); the occlusion is the reference's own term so the technique
-//! matches its ground truth; the depth written is the plane's (as GPSS07), so leaves cut by
-//! another plane are resolved to the plane's thickness.
+//! entries; **each plane drawn as the box of its leaves** (its rectangle × the heights its
+//! leaves span; the inside faces, so the eye may be inside) and **each leaf drawn where the
+//! pixel's ray meets the leaf's own fitted plane**, the ray followed through the box cell by
+//! cell of the hash grid (at most 64 cells), instead of leaf images placed on a flat billboard
+//! by an orientation index — GPSS07's images are displaced and re-shaped by the leaf's height
+//! above and angle to its plane, and a plane seen edge-on covers almost nothing, which no
+//! texture resolution recovers (measured on the chestnut at 800 px: 3.3× 1-spp geometry's ꟻLIP
+//! with images placed on planes, 2.0× with rays met on flat planes, 1.77× through slabs);
+//! fragments from the leaves' triangles (exact overlap) instead of depth-peeled point sprites;
+//! clustering that also weighs a leaf's angle to its plane ([`cluster::EDGE_ON_WEIGHT`]); the
+//! occlusion is the reference's own term so the technique matches its ground truth; the depth
+//! written is the point shown, not the plane's (GPSS07), so crossing planes and the wood
+//! occlude where the leaves lie (it costs the early depth test).
 //!
-//! **Cost**: per pixel of a plane one hash read and up to `entries` record reads and leaf
-//! texture fetches (or one low-resolution fetch); per tree 4 vertices per plane plus its wood.
+//! **Cost**: per pixel of a box one hash read per cell crossed and up to `entries` record reads
+//! and leaf texture fetches in all (or one low-resolution fetch); per tree 8 vertices and 12
+//! triangles per occupied block (4 and 2 for the far cloud) plus its wood.
 //! **Memory** per plant: [`bake::BillboardCloudBaked::bytes`] (planes, cells, lists, records,
 //! tiles with mips) plus the leaf textures and wood. **Limits**: lists of at most 255 entries
-//! per cell (the farthest dropped), 2²⁴ list entries per cloud, 1024² cells per plane; the
-//! thin clusters span much of the crown, so planes are large and the fill (a hash read per
-//! plane pixel, most of them empty) is the cost on a software rasteriser.
+//! per cell (the farthest dropped), 2²⁴ list entries per cloud, 1024² cells per plane, 64
+//! cells per ray; the thin clusters span much of the crown, so planes are large and the fill
+//! (a hash read per cell a box pixel's ray crosses) is the cost on a software rasteriser.
 //!
 //! **Measured** (lavapipe, release, `scripts/measure-bcloud.sh`): the chestnut (17,752 leaves)
 //! bakes in 1.1 s into 10.5 MB (polygonal leaves 8.0 MB). ꟻLIP vs `geometry --spp 16` around
