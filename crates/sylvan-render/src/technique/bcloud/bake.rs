@@ -13,7 +13,7 @@ use sylvan_gpu::Gpu;
 use sylvan_plant::Plant;
 
 /// Bumped whenever the payload below or the bake's result changes.
-pub const FORMAT_VERSION: u32 = 4;
+pub const FORMAT_VERSION: u32 = 5;
 
 /// One plant's three clouds, nearest first.
 #[derive(Debug, Clone, PartialEq)]

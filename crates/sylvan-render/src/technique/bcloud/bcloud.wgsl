@@ -257,13 +257,21 @@ fn evaluate(in: CloudOut, shade: bool, layered: bool) -> CloudHit {
                 hit.kind = 1u;
                 hit.offset = q + d * lambda - in.pst;
                 if (shade) {
-                    let n = unpack_oct(r.normal);
-                    let t = unpack_oct(r.tangent);
+                    let qa = clamp((uv - lo) / max(hi - lo, vec2<f32>(1e-6)), vec2<f32>(0.0), vec2<f32>(1.0));
+                    // The blade's normal there (`LeafRecord::normal_at`).
+                    let cn = r.corner_normals;
+                    let n = normalize(mix(
+                        mix(unpack_oct(cn.x), unpack_oct(cn.y), qa.x),
+                        mix(unpack_oct(cn.z), unpack_oct(cn.w), qa.x),
+                        qa.y,
+                    ));
+                    let t0 = unpack_oct(r.tangent);
+                    let t = normalize(t0 - n * dot(t0, n));
                     let flip = select(1.0, -1.0, ((r.color >> 24u) & 1u) == 1u);
                     let b = cross(n, t) * flip;
                     let m3 = textureSampleLevel(leaf_normal_map, leaf_sampler, uv, lod).rgb * 2.0 - vec3<f32>(1.0);
                     let bent = normalize(t * m3.x + b * m3.y + n * m3.z);
-                    let front = dot(n, in.to_eye) >= 0.0;
+                    let front = dot(unpack_oct(r.normal), in.to_eye) >= 0.0;
                     var rgb = textureSampleLevel(leaf_texture, leaf_sampler, uv, lod).rgb;
                     if (!front) {
                         rgb = textureSampleLevel(leaf_back, leaf_sampler, uv, lod).rgb;
@@ -271,7 +279,6 @@ fn evaluate(in: CloudOut, shade: bool, layered: bool) -> CloudHit {
                     let col = unpack4x8unorm(r.color).rgb;
                     hit.albedo = rgb * col;
                     hit.n = select(-bent, bent, front);
-                    let qa = clamp((uv - lo) / max(hi - lo, vec2<f32>(1e-6)), vec2<f32>(0.0), vec2<f32>(1.0));
                     let ao = unpack4x8unorm(r.ao);
                     hit.ao = mix(mix(ao.x, ao.y, qa.x), mix(ao.z, ao.w, qa.x), qa.y);
                 }

@@ -17,7 +17,7 @@ struct CloudPlane {
     slab: vec4<f32>,
 };
 
-// A leaf (`LeafRecord` in `layers.rs`, 64 bytes): in plane space (s, t, height) the leaf
+// A leaf (`LeafRecord` in `layers.rs`, 80 bytes): in plane space (s, t, height) the leaf
 // image's uv = 0 lies at `origin`, and uv = (to_u · x, to_v · x) for an offset x from it on
 // the leaf's plane.
 struct LeafRecord {
@@ -31,6 +31,8 @@ struct LeafRecord {
     color: u32,
     ao: u32,
     pad: u32,
+    // The shading normal at the uv box corners (octahedral, in `ao`'s order).
+    corner_normals: vec4<u32>,
 };
 
 struct CloudParams {
