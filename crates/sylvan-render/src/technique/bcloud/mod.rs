@@ -63,11 +63,11 @@
 //! (a hash read per cell a box pixel's ray crosses) is the cost on a software rasteriser.
 //!
 //! **Measured** (lavapipe, release, `scripts/measure-bcloud.sh`, BENCHMARKS.md): the chestnut
-//! (17,752 leaves) bakes in 0.9 s into 8.2 MB (polygonal leaves 8.0 MB). ꟻLIP vs `geometry
-//! --spp 16` around one chestnut 800/400/200/100 px tall: 0.101/0.091/0.103/0.122 (1-spp
-//! geometry 0.057/0.072/0.093/0.116, i.e. 1.76/1.26/1.11/1.05×); leaf coverage within 1 % of
-//! geometry's. Frame time on chestnut grids: 1.6× geometry's for one tree filling the view, 0.39×
-//! at 100 trees, 0.10× at 1,000.
+//! (17,752 leaves) bakes in 0.9 s into 8.8 MB (polygonal leaves 8.0 MB). ꟻLIP vs `geometry
+//! --spp 16` around one chestnut 800/400/200/100 px tall: 0.098/0.090/0.103/0.122 (1-spp
+//! geometry 0.057/0.072/0.093/0.116, i.e. 1.70/1.25/1.11/1.05×); leaf coverage within 1 % of
+//! geometry's. Frame time on chestnut grids: 1.6–1.8× geometry's for one tree filling the view,
+//! 0.39× at 100 trees, 0.07× at 1,000.
 
 pub mod bake;
 pub mod cluster;
