@@ -570,32 +570,15 @@ pub fn ray_box(o: Vec3, d: Vec3, lo: Vec3, hi: Vec3) -> Option<(f32, f32)> {
     (t0 <= t1).then_some((t0, t1))
 }
 
-/// The CPU twin of the fragment shader's walk (§5, fig. 7, through a slab): along the ray
-/// `o + λ d` (plane space, `d` away from the viewer, `λ ≥ λ_min`) inside the plane's slab, cell
-/// after cell of the hash grid the ray crosses, nearest first (at most [`MAX_CELLS`]), the
-/// nearest leaf of the cell's list whose image is opaque (alpha ≥ 0.5) where the ray meets it
-/// inside that cell.
+/// The CPU twin of the fragment shader's walk (§5, fig. 7, through a slab): along the line
+/// `o + λ d` (plane space, `d` away from the viewer) inside the plane's slab, cell after cell of
+/// the hash grid it crosses, nearest first (at most [`MAX_CELLS`]), the nearest leaf of the
+/// cell's list whose image is opaque (alpha ≥ 0.5) where the line meets it inside that cell.
 pub fn walk(cloud: &Cloud, plant: &Plant, plane: usize, o: Vec3, d: Vec3) -> Option<Hit> {
-    walk_from(cloud, plant, plane, o, d, f32::MIN)
-}
-
-/// [`walk`] from `λ_min` on (the viewer's own position on the ray).
-pub fn walk_from(
-    cloud: &Cloud,
-    plant: &Plant,
-    plane: usize,
-    o: Vec3,
-    d: Vec3,
-    lambda_min: f32,
-) -> Option<Hit> {
     let p = &cloud.planes[plane];
     let (min, size) = (p.min(), p.size());
     let (h0, h1) = p.heights();
     let (t0, t1) = ray_box(o, d, min.extend(h0), (min + size).extend(h1))?;
-    let t0 = t0.max(lambda_min);
-    if t0 > t1 {
-        return None;
-    }
     let cm = p.origin_cell[3];
     let (nx, ny) = p.cells();
     let start = (o + d * t0).truncate();
