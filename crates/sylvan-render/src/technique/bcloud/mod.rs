@@ -28,8 +28,9 @@
 //!   per-vertex term extrapolated to the leaf's box corners by least squares (fig. 11) and
 //!   interpolated bilinearly, all evaluated at the point the pixel shows. Shadows: the clouds
 //!   cast into the shared cascades with the same walk (its level of detail follows the shadow
-//!   map's texels; leaf alpha at full resolution, as `geometry`'s casters), the far cloud with
-//!   the low-resolution evaluation.
+//!   map's texels; leaf alpha at full resolution, as `geometry`'s casters; the written depth
+//!   pushed away from the sun by a texel × (1 + the leaf's slope), as the slope-scaled depth
+//!   bias `geometry`'s casters get), the far cloud with the low-resolution evaluation.
 //! - **Wood**: the plant's wood mesh, drawn like `geometry`'s, and for the far cloud a
 //!   simplified mesh holding only the branches of the first `far_wood_levels` levels (the
 //!   trunk and main limbs; GPSS07 uses progressive meshes [Hop96]).
@@ -64,10 +65,10 @@
 //!
 //! **Measured** (lavapipe, release, `scripts/measure-bcloud.sh`, BENCHMARKS.md): the chestnut
 //! (17,752 leaves) bakes in 0.9 s into 8.8 MB (polygonal leaves 8.0 MB). ꟻLIP vs `geometry
-//! --spp 16` around one chestnut 800/400/200/100 px tall: 0.098/0.090/0.103/0.122 (1-spp
-//! geometry 0.057/0.072/0.093/0.116, i.e. 1.70/1.25/1.11/1.05×); leaf coverage within 1 % of
-//! geometry's. Frame time on chestnut grids: 1.6–1.8× geometry's for one tree filling the view,
-//! 0.39× at 100 trees, 0.07× at 1,000.
+//! --spp 16` around one chestnut 800/400/200/100 px tall: 0.090/0.083/0.098/0.118 (1-spp
+//! geometry 0.057/0.072/0.093/0.116, i.e. 1.57/1.15/1.05/1.01×); leaf coverage within 1 % of
+//! geometry's. Frame time on chestnut grids: 1.6–2.2× geometry's for one tree filling the view,
+//! 0.37× at 100 trees, 0.07× at 1,000.
 
 pub mod bake;
 pub mod cluster;
