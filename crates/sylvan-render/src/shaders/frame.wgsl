@@ -48,6 +48,13 @@ struct ShadowFragment {
     @builtin(frag_depth) depth: f32,
 };
 
+// The depth buffer's value at a world point (this pass's projection), clamped to [0, 1]: for
+// fragment stages that write the depth of the point they show.
+fn clip_depth(world: vec3<f32>) -> f32 {
+    let clip = frame.view_proj * vec4<f32>(world, 1.0);
+    return clamp(clip.z / clip.w, 0.0, 1.0);
+}
+
 // An opaque caster's opacity (shadow passes: the casters without their own fragment entry,
 // and those that test coverage and discard).
 fn opaque_caster() -> vec4<f32> {

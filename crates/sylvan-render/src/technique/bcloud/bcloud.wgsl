@@ -343,11 +343,6 @@ fn hit_world(in: CloudOut, hit: CloudHit) -> vec3<f32> {
     return in.world + instance_dir_to_world(o * in.keep.z, in.rot);
 }
 
-fn world_depth(world: vec3<f32>) -> f32 {
-    let clip = frame.view_proj * vec4<f32>(world, 1.0);
-    return clip.z / clip.w;
-}
-
 // `geometry`'s leaf lighting (front Lambert, back transmission, sky × occlusion, shadows, fog).
 fn cloud_light(in: CloudOut, hit: CloudHit) -> vec4<f32> {
     let n = instance_dir_to_world(hit.n, in.rot);
@@ -380,7 +375,7 @@ fn fs_cloud(in: CloudOut) -> CloudFragment {
     lit.world = hit_world(in, hit);
     var out: CloudFragment;
     out.color = cloud_light(lit, hit);
-    out.depth = world_depth(lit.world);
+    out.depth = clip_depth(lit.world);
     return out;
 }
 
@@ -402,18 +397,15 @@ fn fs_cloud_lowres(in: CloudOut) -> @location(0) vec4<f32> {
 const SHADOW_PUSH: f32 = 1.0;
 
 @fragment
-fn fs_cloud_shadow(in: CloudOut) -> CloudFragment {
+fn fs_cloud_shadow(in: CloudOut) -> ShadowFragment {
     let hit = evaluate(in, false, true);
     if (hit.kind == 0u) {
         discard;
     }
-    var out: CloudFragment;
-    out.color = opaque_caster();
     let c = abs(dot(instance_dir_to_world(hit.face, in.rot), frame.sun_dir.xyz));
     let slope = min(sqrt(max(1.0 - c * c, 0.0)) / max(c, 1e-3), 16.0);
     let push = SHADOW_PUSH * (1.0 + slope) * hit.footprint * in.keep.z;
-    out.depth = world_depth(hit_world(in, hit) - frame.sun_dir.xyz * push);
-    return out;
+    return ShadowFragment(opaque_caster(), clip_depth(hit_world(in, hit) - frame.sun_dir.xyz * push));
 }
 
 @fragment

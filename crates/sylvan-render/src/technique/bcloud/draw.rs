@@ -178,10 +178,11 @@ fn occupied_rects(c: &layers::Cloud, p: &PlaneRecord) -> Vec<(Vec2, Vec2)> {
 /// The heights above plane `p` that the leaves listed in the cells of its block `[lo, hi]`
 /// span (a ray through the block meets its leaves inside them): thinner than the plane's slab
 /// where the cluster is curved. The far cloud is flat.
-fn block_heights(c: &layers::Cloud, p: &PlaneRecord, lo: Vec2, hi: Vec2) -> (f32, f32) {
+fn block_heights(c: &layers::Cloud, plane: usize, lo: Vec2, hi: Vec2) -> (f32, f32) {
     if !c.layered {
         return (0.0, 0.0);
     }
+    let p = &c.planes[plane];
     let cm = p.origin_cell[3];
     let (nx, ny) = p.cells();
     let a = ((lo - p.min()) / cm).round();
@@ -189,7 +190,7 @@ fn block_heights(c: &layers::Cloud, p: &PlaneRecord, lo: Vec2, hi: Vec2) -> (f32
     let (mut h0, mut h1) = (f32::MAX, f32::MIN);
     for cy in (a.y as u32)..(b.y as u32).min(ny) {
         for cx in (a.x as u32)..(b.x as u32).min(nx) {
-            for &r in list_at(c, p, cx, cy) {
+            for &r in c.list(plane, cx, cy) {
                 if let Some((z0, z1)) = c.records[r as usize].heights() {
                     (h0, h1) = (h0.min(z0), h1.max(z1));
                 }
@@ -202,14 +203,6 @@ fn block_heights(c: &layers::Cloud, p: &PlaneRecord, lo: Vec2, hi: Vec2) -> (f32
     // Inside the plane's slab, with the same margin.
     let (s0, s1) = p.heights();
     ((h0 - 1e-3).max(s0), (h1 + 1e-3).min(s1))
-}
-
-/// The list of cell `(cx, cy)` of plane record `p` of cloud `c`.
-fn list_at<'a>(c: &'a layers::Cloud, p: &PlaneRecord, cx: u32, cy: u32) -> &'a [u32] {
-    let (nx, _) = p.cells();
-    let v = c.cells[(p.grid[2] + cy * nx + cx) as usize];
-    let (start, len) = ((v >> 8) as usize, (v & 255) as usize);
-    &c.lists[start..start + len]
 }
 
 /// The box `[lo, hi]` (plane space) of one block of plane `r` (number `plane` in the plane
@@ -238,6 +231,11 @@ fn block_box(
         )
     };
     let base = vertices.len() as u32;
+    // Model-space corners, for the winding.
+    let model = [0, 1, 2, 3, 4, 5, 6, 7].map(|i| {
+        let p = corner(i);
+        o + u * p.x + v * p.y + n * p.z
+    });
     for i in 0..8 {
         let p = corner(i);
         vertices.push(CloudVertex {
@@ -263,10 +261,7 @@ fn block_box(
         }
         // Counter-clockwise seen from outside in model space (the plane's axes may be either
         // handed).
-        let m = |i: u32| {
-            let p = corner(i);
-            o + u * p.x + v * p.y + n * p.z
-        };
+        let m = |i: u32| model[i as usize];
         let outward = u * out.x + v * out.y + n * out.z;
         let winding = (m(f[1]) - m(f[0])).cross(m(f[2]) - m(f[0])).dot(outward);
         let f = if winding >= 0.0 {
@@ -339,7 +334,7 @@ impl BillboardCloud {
                     let global = gplanes.len() as u32;
                     gplanes.push(raw);
                     for (lo, hi) in occupied_rects(c, rec) {
-                        let (h0, h1) = block_heights(c, rec, lo, hi);
+                        let (h0, h1) = block_heights(c, p, lo, hi);
                         block_box(
                             &r,
                             global,

@@ -61,7 +61,7 @@ pub const MAX_CELLS_PER_SIDE: u32 = 1024;
 /// (`s`, `t` along the plane's axes, `h` the height above it) the point of leaf image
 /// coordinate `uv` is `origin + A uv`; the record holds `origin` and the two rows of `A`'s
 /// pseudo-inverse (`uv = [to_u; to_v] (x − origin)` for any point `x` of the leaf's plane), so
-/// a ray through the billboard is intersected with the leaf where it lies ([`leaf_uv`]).
+/// a ray through the billboard is intersected with the leaf where it lies ([`leaf_hit`]).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
 pub struct LeafRecord {
@@ -166,15 +166,6 @@ impl PlaneRecord {
     /// The slab's lowest and highest height above the plane.
     pub fn heights(&self) -> (f32, f32) {
         (self.slab[0], self.slab[1])
-    }
-    /// Plane-space coordinates (`s`, `t`, height) of a model-space point.
-    pub fn to_plane(&self, p: Vec3) -> Vec3 {
-        let d = p - Vec3::from_slice(&self.origin_cell[..3]);
-        Vec3::new(
-            d.dot(Vec3::from_slice(&self.u[..3])),
-            d.dot(Vec3::from_slice(&self.v[..3])),
-            d.dot(Vec3::from_slice(&self.n[..3])),
-        )
     }
     /// Plane coordinates of a model-space point.
     pub fn project(&self, p: Vec3) -> Vec2 {
@@ -401,7 +392,7 @@ fn record(plant: &Plant, leaf: &Leaf, plane: &Plane) -> LeafRecord {
         .map(|&i| {
             let pos = Vec3::from(m.positions[i as usize]);
             (
-                ao_samples_q(m, i, uv_min, uv_max),
+                box_q(m, i, uv_min, uv_max),
                 crown_occlusion(pos, bmin, bmax),
             )
         })
@@ -416,7 +407,7 @@ fn record(plant: &Plant, leaf: &Leaf, plane: &Plane) -> LeafRecord {
                 .map(|&i| {
                     let vn = Vec3::from(m.normals[i as usize]);
                     let vn = if vn.dot(n) < 0.0 { -vn } else { vn };
-                    (ao_samples_q(m, i, uv_min, uv_max), vn[k])
+                    (box_q(m, i, uv_min, uv_max), vn[k])
                 })
                 .collect();
             // Affine, not bilinear: a blade's vertices do not reach its box's corners, and the
@@ -450,7 +441,7 @@ fn record(plant: &Plant, leaf: &Leaf, plane: &Plane) -> LeafRecord {
 }
 
 /// Vertex `i`'s position in the leaf's `uv` box `[uv_min, uv_max]`, in `[0, 1]²`.
-fn ao_samples_q(m: &sylvan_plant::Mesh, i: u32, uv_min: Vec2, uv_max: Vec2) -> Vec2 {
+fn box_q(m: &sylvan_plant::Mesh, i: u32, uv_min: Vec2, uv_max: Vec2) -> Vec2 {
     (Vec2::from(m.uvs[i as usize]) - uv_min) / (uv_max - uv_min).max(Vec2::splat(1e-6))
 }
 

@@ -268,6 +268,5 @@ fn fs_octahedral_shadow(in: OctOut) -> ShadowFragment {
     }
     let offset = atlas.draw.z * sp.centre_radius.w * in.base_scale.w;
     let world = instance_to_world(s.point, in.base_scale, in.rot) - frame.sun_dir.xyz * offset;
-    let clip = frame.view_proj * vec4<f32>(world, 1.0);
-    return ShadowFragment(opaque_caster(), clamp(clip.z / clip.w, 0.0, 1.0));
+    return ShadowFragment(opaque_caster(), clip_depth(world));
 }

@@ -423,6 +423,5 @@ fn fs_zfield_shadow(in: ZOut) -> ShadowFragment {
     let opacity = select(1.0, clamp(a, 0.0, 1.0), soft && !presence);
     let back = p - lm * plane_distance(sp, z.y, z.w);
     let world = instance_to_world(back, in.base_scale, in.rot);
-    let clip = frame.view_proj * vec4<f32>(world, 1.0);
-    return ShadowFragment(vec4<f32>(opacity), clamp(clip.z / clip.w, 0.0, 1.0));
+    return ShadowFragment(vec4<f32>(opacity), clip_depth(world));
 }
