@@ -195,7 +195,7 @@ fn build_instancing(interp: &turtle::Interpretation, shape: &blade::LeafShape) -
 pub struct PlantStats {
     /// Drawn internodes (`F` segments); 0 for imported meshes.
     pub internodes: usize,
-    /// Leaves (quads or imported leaf pieces).
+    /// Leaves (quads, or the blades of an imported mesh).
     pub leaves: usize,
     /// Triangles, wood + leaves.
     pub triangles: usize,

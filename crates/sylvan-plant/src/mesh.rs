@@ -65,6 +65,6 @@ pub struct Plant {
     pub instancing: crate::Instancing,
     /// Drawn internodes (`F` segments); 0 for imported meshes.
     pub internodes: usize,
-    /// Number of leaves (leaf quads / needle tufts, or leaf pieces of an imported mesh).
+    /// Number of leaves (leaf quads / needle tufts, or the blades of an imported mesh).
     pub leaf_count: usize,
 }

@@ -404,6 +404,28 @@ fn broadleaf_presets_have_individual_leaves_on_petioles() {
                 "{name}: leaf {i} base"
             );
         }
+        // No two leaves coincide (a leaf emitted twice at one turtle state is drawn twice).
+        let mut seen = std::collections::HashSet::new();
+        for w in firsts.windows(2) {
+            let mut k: Vec<[i32; 3]> = p.leaves.indices[w[0] as usize..w[1] as usize]
+                .iter()
+                .map(|&i| key(glam::Vec3::from(p.leaves.positions[i as usize])))
+                .collect();
+            k.sort();
+            k.dedup();
+            assert!(seen.insert(k), "{name}: two leaves coincide");
+        }
+        // Through the importer: the same leaves (blades), not groups of them.
+        let dir = std::env::temp_dir().join(format!("sylvan-blades-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let glb = dir.join(format!("{name}.glb"));
+        sylvan_plant::export::write_glb(&p, &glb).unwrap();
+        let q = sylvan_plant::load(&glb).unwrap();
+        let _ = std::fs::remove_dir_all(&dir);
+        assert_eq!(
+            q.leaf_count, s.leaves,
+            "{name}: leaves through the importer"
+        );
         // The petiole in the texture: opaque just above the bottom edge, in the middle.
         let (x, y) = (tex.width / 2, tex.height - 4);
         assert!(

@@ -4,8 +4,9 @@
 //! Wood is split into connected pieces (vertices welded by position); each piece is a branch.
 //! The piece holding the lowest vertex is the trunk (root); every other piece hangs from the
 //! piece it comes closest to (its attachment point), and a breadth-first walk from the trunk
-//! turns those links into a tree. Leaves (connected leaf pieces) are clustered around the
-//! branch whose wood is nearest to their centre. When the wood is a single piece (merged
+//! turns those links into a tree. Leaves are the leaf mesh's blades — triangles joined across
+//! shared edges whose ends agree in position and texture coordinates ([`blades`]) — clustered
+//! around the branch whose wood is nearest to their centre. When the wood is a single piece (merged
 //! meshes) the leaves are clustered spatially instead: recursive median splits along the
 //! longest axis, down to [`LEAVES_PER_CLUSTER`] leaves. Deviation: this is a heuristic, not a
 //! reconstruction of the modelling tool's own hierarchy.
@@ -24,8 +25,9 @@ pub const LEAVES_PER_CLUSTER: usize = 48;
 /// Most wood surface samples used to attach leaves to branches.
 pub const MAX_SAMPLES: usize = 4_000_000;
 
-/// Connected pieces of a mesh: per triangle, its piece; and the piece count.
-fn pieces(m: &Mesh) -> (Vec<u32>, usize) {
+/// Welded vertex numbers: vertices within 10⁻⁵ of the mesh's diagonal of each other (and, with
+/// `uv`, within 10⁻⁵ in texture coordinates) get one number. Returns them and their count.
+fn weld(m: &Mesh, uv: bool) -> (Vec<u32>, usize) {
     let diag = {
         let mut b = Aabb::default();
         for p in &m.positions {
@@ -37,29 +39,46 @@ fn pieces(m: &Mesh) -> (Vec<u32>, usize) {
             (b.max - b.min).length().max(1e-6)
         }
     };
-    let q = diag * 1e-5;
-    let mut weld: HashMap<[i64; 3], u32> = HashMap::new();
-    let ids: Vec<u32> = m
+    let (q, quv) = (diag * 1e-5, 1e-5f32);
+    let mut weld: HashMap<[i64; 5], u32> = HashMap::new();
+    let ids = m
         .positions
         .iter()
-        .map(|p| {
+        .enumerate()
+        .map(|(i, p)| {
+            let t = if uv {
+                m.uvs.get(i).copied().unwrap_or([0.0; 2])
+            } else {
+                [0.0; 2]
+            };
             let k = [
                 (p[0] / q).round() as i64,
                 (p[1] / q).round() as i64,
                 (p[2] / q).round() as i64,
+                (t[0] / quv).round() as i64,
+                (t[1] / quv).round() as i64,
             ];
             let n = weld.len() as u32;
             *weld.entry(k).or_insert(n)
         })
         .collect();
-    let mut parent: Vec<u32> = (0..weld.len() as u32).collect();
-    fn find(p: &mut [u32], mut x: u32) -> u32 {
-        while p[x as usize] != x {
-            p[x as usize] = p[p[x as usize] as usize];
-            x = p[x as usize];
-        }
-        x
+    (ids, weld.len())
+}
+
+/// Union-find root, with path halving.
+fn find(p: &mut [u32], mut x: u32) -> u32 {
+    while p[x as usize] != x {
+        p[x as usize] = p[p[x as usize] as usize];
+        x = p[x as usize];
     }
+    x
+}
+
+/// Connected pieces of a mesh (vertices welded by position): per triangle, its piece; and the
+/// piece count.
+fn pieces(m: &Mesh) -> (Vec<u32>, usize) {
+    let (ids, nv) = weld(m, false);
+    let mut parent: Vec<u32> = (0..nv as u32).collect();
     for t in m.indices.chunks_exact(3) {
         let a = find(&mut parent, ids[t[0] as usize]);
         for &v in &t[1..] {
@@ -80,6 +99,50 @@ fn pieces(m: &Mesh) -> (Vec<u32>, usize) {
         })
         .collect();
     (tri_piece, label.len())
+}
+
+/// Blades of a leaf mesh: per triangle, its blade; and the blade count. Two triangles are one
+/// blade when they share an edge whose two ends agree in position and texture coordinates
+/// (welded within 10⁻⁵ of the mesh's diagonal and 10⁻⁵ in uv), so that
+/// - leaflets meeting at a point (a palmate leaf's petiole tip) are separate leaves, as the
+///   L-system presets make them;
+/// - a flat-shaded export (each triangle its own vertices, split normals) still joins;
+/// - a blade never spans a texture seam, so each blade has one affine map from its texture to
+///   its surface (what `billboard-cloud` fits per leaf).
+fn blades(m: &Mesh) -> (Vec<u32>, usize) {
+    let (ids, _) = weld(m, true);
+    let nt = m.indices.len() / 3;
+    let mut parent: Vec<u32> = (0..nt as u32).collect();
+    let mut edges: HashMap<(u32, u32), u32> = HashMap::with_capacity(nt * 3 / 2);
+    for (t, tri) in m.indices.chunks_exact(3).enumerate() {
+        for e in 0..3 {
+            let (a, b) = (ids[tri[e] as usize], ids[tri[(e + 1) % 3] as usize]);
+            if a == b {
+                continue;
+            }
+            let key = (a.min(b), a.max(b));
+            match edges.entry(key) {
+                std::collections::hash_map::Entry::Occupied(o) => {
+                    let (x, y) = (find(&mut parent, *o.get()), find(&mut parent, t as u32));
+                    if x != y {
+                        parent[y as usize] = x;
+                    }
+                }
+                std::collections::hash_map::Entry::Vacant(v) => {
+                    v.insert(t as u32);
+                }
+            }
+        }
+    }
+    let mut label: HashMap<u32, u32> = HashMap::new();
+    let tri_blade = (0..nt as u32)
+        .map(|t| {
+            let r = find(&mut parent, t);
+            let n = label.len() as u32;
+            *label.entry(r).or_insert(n)
+        })
+        .collect();
+    (tri_blade, label.len())
 }
 
 /// Lexicographic order of points (a tie-break independent of vertex order).
@@ -157,10 +220,10 @@ impl Grid {
 }
 
 /// Builds the hierarchy and reorders the index buffers of `wood` and `leaves` to match.
-/// Returns the hierarchy and the number of leaves (leaf pieces).
+/// Returns the hierarchy and the number of leaves (blades, see [`blades`]).
 pub fn build(wood: &mut Mesh, leaves: &mut Mesh) -> (Hierarchy, usize) {
     let (wood_piece, nw) = pieces(wood);
-    let (leaf_piece, nl) = pieces(leaves);
+    let (leaf_piece, nl) = blades(leaves);
     // Leaf centres.
     let mut centre = vec![Vec3::ZERO; nl];
     let mut count = vec![0u32; nl];

@@ -64,10 +64,12 @@
 //! (a hash read per cell a box pixel's ray crosses) is the cost on a software rasteriser.
 //!
 //! **Measured** (lavapipe, release, `scripts/measure-bcloud.sh`, BENCHMARKS.md): the chestnut
-//! (17,752 leaves) bakes in 0.9 s into 8.8 MB (polygonal leaves 8.0 MB). ꟻLIP vs `geometry
-//! --spp 16` around one chestnut 800/400/200/100 px tall: 0.090/0.083/0.098/0.118 (1-spp
-//! geometry 0.057/0.072/0.093/0.116, i.e. 1.57/1.15/1.05/1.01×); leaf coverage within 1 % of
-//! geometry's. Frame time on chestnut grids: 1.6–2.2× geometry's for one tree filling the view,
+//! (14,873 leaves) bakes in 0.8 s into 8.3 MB (polygonal leaves 6.7 MB). ꟻLIP vs `geometry
+//! --spp 16` around one chestnut 800/400/200/100 px tall: 0.090/0.082/0.098/0.119 (1-spp
+//! geometry 0.057/0.072/0.093/0.117, i.e. 1.56/1.14/1.05/1.02×); leaf coverage within 1 % of
+//! geometry's; the same chestnut exported to `.glb` and read back: 1.14/1.05× at 400/200 px
+//! (the importer's leaves are blades, `sylvan_plant::import`). Frame time on chestnut grids:
+//! 1.6–2.2× geometry's for one tree filling the view,
 //! 0.37× at 100 trees, 0.07× at 1,000.
 
 pub mod bake;
