@@ -1290,6 +1290,7 @@ fn cover_settings(scene: &Scene, source: &Source, far: f32) -> CoverSettings {
         fallback_density: (scene.estimated_trees() / area as f64) as f32,
         trees_end_m: scene.world.tree_distance_m,
         reach_m: scene.world.tree_distance_m.min(far),
+        prefetch_m: scene.world.prefetch_m,
         crown_m,
     }
 }

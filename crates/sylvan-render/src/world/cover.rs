@@ -20,7 +20,8 @@
 //! (x mod N, z mod N), so one repeat-addressed texture is sampled at `world / (N · tile)` with
 //! bilinear filtering seamless across tiles, and a `N × N` tag texture says which tile each
 //! cell holds (a cell holding another tile reads as "no cover": Γ = Γ̄, the scene's mean
-//! density). Memory is `(N G)² × 4` bytes, `N G` ≤ [`MAX_ATLAS`] (64 MiB at most, a window of
+//! density). `N` spans twice the reach plus the world's prefetch ring (`[world] prefetch_m`), so
+//! tiles entering the reach were asked for a ring earlier. Memory is `(N G)² × 4` bytes, `N G` ≤ [`MAX_ATLAS`] (64 MiB at most, a window of
 //! 8 km at 2 m texels), whatever the size of the world.
 
 use super::produce::{Job, Produced, Producer, Source};
@@ -249,6 +250,9 @@ pub(crate) struct CoverSettings {
     pub trees_end_m: f32,
     /// How far from the eye tiles are wanted, metres.
     pub reach_m: f32,
+    /// Tiles are asked for this much beyond `reach_m` (the world's prefetch ring), so a tile
+    /// entering the reach has been produced ahead instead of waited for.
+    pub prefetch_m: f32,
     /// Largest crown radius of any tree, metres.
     pub crown_m: f32,
 }
@@ -264,7 +268,8 @@ impl GroundCover {
         let layout = CoverLayout::new(source.tile_m, settings.crown_m);
         let tiles = terrain_size.map(|s| ((s / layout.tile_m).ceil() as i32).max(1));
         let limit = gpu.device.limits().max_texture_dimension_2d.min(MAX_ATLAS);
-        let wanted = (2.0 * settings.reach_m.min(1e9) / layout.tile_m).ceil() as i64 + 2;
+        let window = settings.reach_m.min(1e9) + settings.prefetch_m.min(1e9);
+        let wanted = (2.0 * window / layout.tile_m).ceil() as i64 + 2;
         let cells = if settings.enabled {
             (wanted.min(tiles[0].max(tiles[1]) as i64) as u32)
                 .min(limit / layout.texels)
@@ -392,9 +397,7 @@ impl GroundCover {
                 }
             }
         }
-        for &(d, key) in &wanted {
-            producer.request(key, d);
-        }
+        producer.request(wanted.iter().copied());
         let keep: std::collections::HashSet<TileKey> = wanted.iter().map(|w| w.1).collect();
         producer.cancel(|k| keep.contains(&k));
         let must: Vec<TileKey> = wanted

@@ -392,6 +392,7 @@ impl World {
         // Tiles the GPU can seed are planned here instead (nearest first).
         let wanted = self.tiles_within(eye, range + self.settings.prefetch_m);
         let mut gpu_tiles = Vec::new();
+        let mut cpu_tiles = Vec::new();
         for &(d, key) in &wanted {
             if self.resident.contains_key(&key)
                 || self.arrived.iter().any(|a| a.key == key)
@@ -401,9 +402,10 @@ impl World {
             }
             match self.gpu_seeds(key) {
                 true => gpu_tiles.push((d, key)),
-                false => self.producer.request(key, d),
+                false => cpu_tiles.push((d, key)),
             }
         }
+        self.producer.request(cpu_tiles);
         let wanted_set: std::collections::HashSet<TileKey> = wanted.iter().map(|w| w.1).collect();
         self.producer.cancel(|k| wanted_set.contains(&k));
         // 2. What arrived; then wait for tiles in range that a drawn pass sees.
@@ -696,9 +698,7 @@ impl World {
         while self.free_pages.len() < need {
             self.grow_pool(gpu, need)?;
         }
-        Ok((0..need)
-            .map(|_| self.free_pages.pop().expect("enough pages"))
-            .collect())
+        Ok(take_pages(&mut self.free_pages, need))
     }
 
     fn insert(&mut self, gpu: &Gpu, tile: TileTrees) -> Result<(), RenderError> {
@@ -807,6 +807,37 @@ pub(crate) fn worker_threads() -> usize {
         .clamp(1, 8)
 }
 
+/// Takes `need` pages from `free` (any order), consecutive where it can: the lowest run of at
+/// least `need` consecutive free pages, else the lowest pages. A tile in consecutive pages is
+/// one upload; scattered over the holes evictions leave, it was one per run, and the frame's
+/// CPU time grew with the fragmentation (up to 29 writes and 4 ms for a tile).
+fn take_pages(free: &mut Vec<u32>, need: usize) -> Vec<u32> {
+    if need == 0 {
+        return Vec::new();
+    }
+    // Descending, so the lowest pages are at the end (popped first).
+    free.sort_unstable_by(|a, b| b.cmp(a));
+    let n = free.len();
+    // Runs are maximal stretches of consecutive values (descending in `free`).
+    let mut end = n;
+    while end > 0 {
+        let mut start = end - 1;
+        while start > 0 && free[start - 1] == free[start] + 1 {
+            start -= 1;
+        }
+        if end - start >= need {
+            // The lowest `need` pages of this run: free[end - need..end], ascending once reversed.
+            let mut taken: Vec<u32> = free.drain(end - need..end).collect();
+            taken.reverse();
+            return taken;
+        }
+        end = start;
+    }
+    (0..need)
+        .map(|_| free.pop().expect("enough pages"))
+        .collect()
+}
+
 fn pool_buffer(gpu: &Gpu, pages: u32) -> wgpu::Buffer {
     gpu.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("tree_pool"),
@@ -826,4 +857,21 @@ fn page_bytes(n: u32) -> u64 {
 /// Distance from `p` to the box (0 inside).
 fn box_distance(p: Vec3, min: Vec3, max: Vec3) -> f32 {
     (p.clamp(min, max) - p).length()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::take_pages;
+
+    #[test]
+    fn pages_are_taken_consecutive_where_a_run_is_long_enough() {
+        // Holes of 2, 3 and 5 pages.
+        let mut free = vec![9, 1, 20, 2, 21, 22, 30, 31, 32, 33, 34];
+        assert_eq!(take_pages(&mut free, 3), vec![20, 21, 22]);
+        assert_eq!(take_pages(&mut free, 4), vec![30, 31, 32, 33]);
+        // No run of 4 left: the lowest pages.
+        assert_eq!(take_pages(&mut free, 4), vec![1, 2, 9, 34]);
+        assert!(free.is_empty());
+        assert!(take_pages(&mut free, 0).is_empty());
+    }
 }

@@ -151,6 +151,8 @@ pub(crate) struct Producer<T: Produced> {
     done: Receiver<T>,
     /// Requested and not yet received.
     pending: HashSet<TileKey>,
+    /// Requests not made yet: the queue was locked by a worker ([`Producer::request`]).
+    deferred: Vec<(f32, TileKey)>,
     workers: Vec<JoinHandle<()>>,
 }
 
@@ -164,7 +166,10 @@ impl<T: Produced> Producer<T> {
                 let (job, queue, tx) = (job.clone(), queue.clone(), done_tx.clone());
                 std::thread::Builder::new()
                     .name(format!("sylvan-{name}-{i}"))
-                    .spawn(move || worker(&*job, &queue, &tx))
+                    .spawn(move || {
+                        background_priority();
+                        worker(&*job, &queue, &tx)
+                    })
                     .expect("spawning a tile worker")
             })
             .collect();
@@ -174,6 +179,7 @@ impl<T: Produced> Producer<T> {
             done_tx,
             done,
             pending: HashSet::new(),
+            deferred: Vec::new(),
             workers,
         }
     }
@@ -183,20 +189,57 @@ impl<T: Produced> Producer<T> {
         self.pending.len()
     }
 
-    /// Asks for `key` with `priority` (lower first); re-asking updates the priority.
-    pub fn request(&mut self, key: TileKey, priority: f32) {
-        let mut q = self.queue.0.lock().expect("tile queue");
-        if self.pending.insert(key) {
-            q.waiting.push((priority, key));
-            self.queue.1.notify_one();
-        } else if let Some(job) = q.waiting.iter_mut().find(|j| j.1 == key) {
-            job.0 = priority;
+    /// Asks for each `(priority, key)` (lower priority first); re-asking updates the
+    /// priority. The queue is locked once for all of them: a worker runs at a lower priority
+    /// ([`WORKER_NICE`]), and one preempted while holding the lock would stall the render
+    /// thread at every lock it takes.
+    ///
+    /// The render thread does not wait for the lock: when a worker holds it, the requests are
+    /// kept and made at the next call (a frame later).
+    pub fn request(&mut self, tiles: impl IntoIterator<Item = (f32, TileKey)>) {
+        self.deferred.extend(tiles);
+        let queue = self.queue.clone();
+        let Ok(mut q) = queue.0.try_lock() else {
+            return;
+        };
+        self.enqueue(&mut q);
+    }
+
+    /// Makes the deferred requests (the queue locked by the caller).
+    fn enqueue(&mut self, q: &mut Queue) {
+        let mut added = false;
+        let mut at: HashMap<TileKey, usize> = HashMap::new();
+        for (priority, key) in self.deferred.drain(..) {
+            if self.pending.insert(key) {
+                q.waiting.push((priority, key));
+                added = true;
+            } else {
+                if at.is_empty() {
+                    at = q
+                        .waiting
+                        .iter()
+                        .enumerate()
+                        .map(|(i, j)| (j.1, i))
+                        .collect();
+                }
+                if let Some(&i) = at.get(&key) {
+                    q.waiting[i].0 = priority;
+                }
+            }
+        }
+        if added {
+            self.queue.1.notify_all();
         }
     }
 
     /// Drops requests for tiles no longer wanted (not yet started).
+    /// Not waiting for the lock either: a request not cancelled now is cancelled at a later
+    /// call, or produced (and dropped by the caller).
     pub fn cancel(&mut self, keep: impl Fn(TileKey) -> bool) {
-        let mut q = self.queue.0.lock().expect("tile queue");
+        self.deferred.retain(|&(_, k)| keep(k));
+        let Ok(mut q) = self.queue.0.try_lock() else {
+            return;
+        };
         let pending = &mut self.pending;
         q.waiting.retain(|&(_, k)| {
             let kept = keep(k);
@@ -220,6 +263,11 @@ impl<T: Produced> Producer<T> {
     /// returns every tile finished meanwhile.
     pub fn wait_for(&mut self, keys: &[TileKey]) -> Vec<T> {
         let mut out = Vec::new();
+        if !self.deferred.is_empty() {
+            let queue = self.queue.clone();
+            let mut q = queue.0.lock().expect("tile queue");
+            self.enqueue(&mut q);
+        }
         while keys.iter().any(|k| self.pending.contains(k)) {
             // Run a wanted job here if it has not started; else wait for a worker.
             let job = {
@@ -250,6 +298,25 @@ impl<T: Produced> Drop for Producer<T> {
             let _ = w.join();
         }
         let _ = &self.done_tx;
+    }
+}
+
+/// Niceness of the tile workers: the render thread's per-frame work must not wait for a core
+/// while they produce (on 2 cores, one tree worker and one cover worker beside the render
+/// thread made its CPU time jump 3–10× in frames where they ran).
+pub(crate) const WORKER_NICE: i32 = 10;
+
+/// Makes the calling thread a background thread (Linux; elsewhere a no-op — `setpriority`
+/// there would lower the whole process): scheduling class `SCHED_BATCH`, whose threads never
+/// preempt a running thread when they wake (a woken worker took the render thread's core for
+/// 2–5 ms in frames that queued tiles), at nice [`WORKER_NICE`].
+fn background_priority() {
+    #[cfg(target_os = "linux")]
+    // SAFETY: both calls read only the parameter passed; pid/who 0 is the calling thread.
+    unsafe {
+        let param = libc::sched_param { sched_priority: 0 };
+        libc::sched_setscheduler(0, libc::SCHED_BATCH, &param);
+        libc::setpriority(libc::PRIO_PROCESS, 0, WORKER_NICE);
     }
 }
 
