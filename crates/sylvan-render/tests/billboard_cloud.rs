@@ -51,9 +51,9 @@ fn samples(t: [Vec3; 3], n: usize) -> Vec<(Vec3, [f32; 3])> {
 fn every_leaf_is_in_exactly_one_plane_of_each_cloud() {
     for preset in ["chestnut", "pine"] {
         let (plant, b) = baked(preset);
-        let n = cluster::leaves(&plant).len();
-        assert_eq!(b.leaves as usize, n);
+        assert_eq!(b.leaves as usize, cluster::leaves(&plant, false).len());
         for (level, c) in b.clouds.iter().enumerate() {
+            let n = cluster::leaves(&plant, bake::cut_leaves(level)).len();
             let mut seen = vec![0u32; n];
             for m in &c.members {
                 for &l in m {
@@ -72,9 +72,9 @@ fn every_leaf_is_in_exactly_one_plane_of_each_cloud() {
 /// Each leaf's triangles in leaf-image coordinates.
 fn uv_tris(plant: &sylvan_plant::Plant, leaf: &cluster::Leaf) -> Vec<[Vec2; 3]> {
     let m = &plant.leaves;
-    m.indices[leaf.indices.start as usize..leaf.indices.end as usize]
-        .chunks_exact(3)
-        .map(|t| [t[0], t[1], t[2]].map(|i| Vec2::from(m.uvs[i as usize])))
+    leaf.triangles
+        .iter()
+        .map(|t| t.map(|i| Vec2::from(m.uvs[i as usize])))
         .collect()
 }
 
@@ -85,7 +85,7 @@ fn uv_tris(plant: &sylvan_plant::Plant, leaf: &cluster::Leaf) -> Vec<[Vec2; 3]> 
 #[test]
 fn cell_lists_cover_exactly_the_overlapping_leaf_fragments() {
     let plant = sylvan_plant::preset("chestnut").expect("preset");
-    let leaves = cluster::leaves(&plant);
+    let leaves = cluster::leaves(&plant, true);
     let planes = cluster::cluster(&plant, &leaves, 40, 6);
     let spec = layers::CloudSpec {
         cells: 1 << 14,
@@ -150,7 +150,7 @@ fn cell_lists_cover_exactly_the_overlapping_leaf_fragments() {
 #[test]
 fn slabs_hold_their_leaves() {
     let (plant, b) = baked("chestnut");
-    let leaves = cluster::leaves(&plant);
+    let leaves = cluster::leaves(&plant, true);
     for (level, c) in b.clouds.iter().enumerate().take(2) {
         let mut points = 0;
         for (p, members) in c.members.iter().enumerate() {
@@ -188,7 +188,7 @@ fn slabs_hold_their_leaves() {
 #[test]
 fn the_walk_keeps_the_leaves_coverage() {
     let (plant, b) = baked("chestnut");
-    let leaves = cluster::leaves(&plant);
+    let leaves = cluster::leaves(&plant, true);
     let c = &b.clouds[0];
     let mut rng = 0x1234_5678_u32;
     let mut next = move || {
@@ -415,7 +415,7 @@ fn one_chestnut_matches_the_geometry_and_both_frames_agree() {
 #[ignore]
 fn diagnostics() {
     let plant = sylvan_plant::preset("chestnut").expect("preset");
-    let leaves = cluster::leaves(&plant);
+    let leaves = cluster::leaves(&plant, true);
     for k in [160usize, 64, 24] {
         let planes = cluster::cluster(&plant, &leaves, k, 10);
         let (mut cos, mut area, mut thick, mut rect) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);

@@ -285,7 +285,7 @@ fn solve3(a: [[f32; 3]; 3], b: [f32; 3]) -> Option<[f32; 3]> {
 
 /// Least-squares `f(x, y) = a x + b y + c` through the samples (with a tiny ridge so a line of
 /// samples still solves, flat across it).
-fn fit_affine(samples: &[(Vec2, f32)]) -> [f32; 3] {
+pub(crate) fn fit_affine(samples: &[(Vec2, f32)]) -> [f32; 3] {
     let mut a = [[0.0f32; 3]; 3];
     let mut b = [0.0f32; 3];
     for &(p, f) in samples {
@@ -357,6 +357,9 @@ fn record(plant: &Plant, leaf: &Leaf, plane: &Plane) -> LeafRecord {
         color += Vec3::from(m.colors[i as usize]);
     }
     color /= leaf.vertices.len() as f32;
+    // A part of a bent leaf shows its side of the cuts only.
+    let uv_min = uv_min.max(leaf.uv_clip[0]);
+    let uv_max = uv_max.min(leaf.uv_clip[1]);
     let f: Vec<[f32; 3]> = fits.iter().map(|l| fit_affine(l)).collect();
     // Plane space: x = a uv + origin, least squares; the record holds origin and the rows of
     // a's pseudo-inverse (aᵀa)⁻¹aᵀ.
@@ -695,9 +698,9 @@ pub fn build(
     let mut records = vec![LeafRecord::zeroed(); leaves.len()];
     // Each leaf's triangles in image coordinates.
     let uv_tris = |leaf: &Leaf| -> Vec<[Vec2; 3]> {
-        m.indices[leaf.indices.start as usize..leaf.indices.end as usize]
-            .chunks_exact(3)
-            .map(|t| [t[0], t[1], t[2]].map(|i| Vec2::from(m.uvs[i as usize])))
+        leaf.triangles
+            .iter()
+            .map(|t| t.map(|i| Vec2::from(m.uvs[i as usize])))
             .collect()
     };
     // The slabs: the box of the plane's fitted leaves (plane space).
