@@ -346,3 +346,50 @@ fn worker<T>(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    struct Made(TileKey);
+    impl Produced for Made {
+        fn key(&self) -> TileKey {
+            self.0
+        }
+    }
+
+    #[test]
+    fn requests_made_while_a_worker_holds_the_queue_are_not_lost() {
+        let job: Job<Made> = Arc::new(Made);
+        let mut p = Producer::new(job, 1, "test");
+        let a = TileKey { x: 1, z: 2 };
+        let b = TileKey { x: 3, z: 4 };
+        {
+            // A worker holding the queue: the request is deferred, not waited for.
+            let queue = p.queue.clone();
+            let _held = queue.0.lock().expect("tile queue");
+            p.request([(1.0, a)]);
+            assert_eq!(p.deferred.len(), 1);
+            assert_eq!(p.pending(), 0);
+        }
+        // A tile that must be drawn is produced even though its request was deferred.
+        let got = p.wait_for(&[a]);
+        assert!(
+            got.iter().any(|t| t.0 == a),
+            "the deferred tile was not produced"
+        );
+        assert!(p.deferred.is_empty());
+        // A deferred request no longer wanted is dropped by `cancel`.
+        {
+            let queue = p.queue.clone();
+            let _held = queue.0.lock().expect("tile queue");
+            p.request([(1.0, b)]);
+        }
+        p.cancel(|k| k != b);
+        assert!(p.deferred.is_empty());
+        // The next request (lock free) goes to the workers.
+        p.request([(1.0, b)]);
+        let got = p.wait_for(&[b]);
+        assert!(got.iter().any(|t| t.0 == b));
+    }
+}
