@@ -21,8 +21,9 @@
 //! bilinear filtering seamless across tiles, and a `N × N` tag texture says which tile each
 //! cell holds (a cell holding another tile reads as "no cover": Γ = Γ̄, the scene's mean
 //! density). `N` spans twice the reach plus the world's prefetch ring (`[world] prefetch_m`), so
-//! tiles entering the reach were asked for a ring earlier. Memory is `(N G)² × 4` bytes, `N G` ≤ [`MAX_ATLAS`] (64 MiB at most, a window of
-//! 8 km at 2 m texels), whatever the size of the world.
+//! tiles entering the reach were asked for a ring earlier. Memory is `(N G)² × 4` bytes,
+//! `N G` ≤ [`MAX_ATLAS`] (64 MiB at most, a window of 8 km at 2 m texels), whatever the size of
+//! the world.
 
 use super::produce::{Job, Produced, Producer, Source};
 use super::{TileKey, worker_threads};

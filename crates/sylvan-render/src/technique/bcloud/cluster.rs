@@ -161,7 +161,9 @@ pub fn parts(
         let b: Vec<[u32; 3]> = tris.iter().filter(above).copied().collect();
         (a, b)
     };
-    let mut best: Option<(f32, usize, f32)> = None;
+    // (spread left, axis, cut, the two sides)
+    type Cut = (f32, usize, f32, Vec<[u32; 3]>, Vec<[u32; 3]>);
+    let mut best: Option<Cut> = None;
     for axis in 0..2 {
         // At the middle of the box, moved onto the nearest vertex line within a quarter of
         // the box (a midrib), so no triangle reaches across the cut.
@@ -179,14 +181,13 @@ pub fn parts(
         }
         let ((ra, wa), (rb, wb)) = (bend(m, &a), bend(m, &b));
         let r = ((ra * ra * wa + rb * rb * wb) / (wa + wb).max(1e-30)).sqrt();
-        if best.is_none_or(|x| r < x.0) {
-            best = Some((r, axis, c));
+        if best.as_ref().is_none_or(|x| r < x.0) {
+            best = Some((r, axis, c, a, b));
         }
     }
-    let Some((_, axis, c)) = best.filter(|b| b.0 <= CUT_GAIN * r0) else {
+    let Some((_, axis, c, a, b)) = best.filter(|b| b.0 <= CUT_GAIN * r0) else {
         return vec![(tris, clip)];
     };
-    let (a, b) = sides(axis, c);
     let (mut clip_a, mut clip_b) = (clip, clip);
     clip_a[1][axis] = c;
     clip_b[0][axis] = c;

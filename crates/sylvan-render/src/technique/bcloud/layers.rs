@@ -285,7 +285,7 @@ fn solve3(a: [[f32; 3]; 3], b: [f32; 3]) -> Option<[f32; 3]> {
 
 /// Least-squares `f(x, y) = a x + b y + c` through the samples (with a tiny ridge so a line of
 /// samples still solves, flat across it).
-pub(crate) fn fit_affine(samples: &[(Vec2, f32)]) -> [f32; 3] {
+fn fit_affine(samples: &[(Vec2, f32)]) -> [f32; 3] {
     let mut a = [[0.0f32; 3]; 3];
     let mut b = [0.0f32; 3];
     for &(p, f) in samples {
