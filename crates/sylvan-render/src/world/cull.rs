@@ -1,5 +1,6 @@
-//! The GPU cull: per frame, the page table (tiles a pass may see), the (pass, species) list
-//! layout and the uniforms are uploaded; one dispatch culls every tree of those pages into the
+//! The GPU cull: per frame, the run table (runs of consecutive pool pages of the tiles a pass
+//! may see), the (pass, species) list layout and the uniforms are uploaded; one dispatch (a
+//! workgroup row per page, each finding its run) culls every tree of those runs into the
 //! lists, a second writes each indirect draw's arguments, and the lists' counts are copied
 //! for reading back once the frame is done.
 
@@ -114,11 +115,16 @@ impl IndirectDraw {
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
-pub(crate) struct GpuPage {
+pub(crate) struct GpuRun {
+    /// First tree in the pool.
     pub first: u32,
+    /// Trees (consecutive in the pool).
     pub count: u32,
+    /// Bit p: pass p sees them.
     pub passes: u32,
-    pub _pad: u32,
+    /// The run's first workgroup row: the rows of the runs before it (one per
+    /// [`super::PAGE`] trees).
+    pub row: u32,
 }
 
 #[repr(C)]
@@ -167,7 +173,9 @@ pub(crate) struct FrameCull<'a> {
     pub frustums: &'a [Option<Frustum>; PASSES],
     /// With shadows: which casters each cascade needs.
     pub casters: Option<&'a CasterCull>,
-    pub pages: &'a [GpuPage],
+    /// Runs of pool trees to cull, and their workgroup rows in all.
+    pub runs: &'a [GpuRun],
+    pub rows: u32,
     /// Changes whenever the pool buffer is replaced (grown).
     pub pool_generation: u64,
     /// Per (pass, group) list: the most trees it can receive.
@@ -243,7 +251,7 @@ pub(crate) struct Cull {
     sort_scan: wgpu::ComputePipeline,
     sort_scatter: wgpu::ComputePipeline,
     parked: Storage,
-    pages: Storage,
+    runs: Storage,
     lists: Storage,
     counters: Storage,
     trees: Storage,
@@ -387,7 +395,7 @@ impl Cull {
                 mapped_at_creation: false,
             }),
             species_spheres,
-            pages: Storage::new(gpu, "cull_pages", u, 4096),
+            runs: Storage::new(gpu, "cull_runs", u, 4096),
             lists: Storage::new(gpu, "cull_lists", u, n_lists as u64 * 8),
             counters: Storage::new(
                 gpu,
@@ -418,7 +426,7 @@ impl Cull {
     /// GPU bytes.
     pub fn bytes(&self) -> u64 {
         [
-            &self.pages,
+            &self.runs,
             &self.lists,
             &self.counters,
             &self.trees,
@@ -499,9 +507,7 @@ impl Cull {
         let generations = (f.pool_generation, f.pyramid.generation);
         let mut stale = self.bind.as_ref().is_none_or(|b| b.1 != generations);
         stale |= self.trees.reserve(gpu, at as u64 * TREE_BYTES);
-        stale |= self
-            .pages
-            .reserve(gpu, std::mem::size_of_val(f.pages) as u64);
+        stale |= self.runs.reserve(gpu, std::mem::size_of_val(f.runs) as u64);
         stale |= self
             .draws
             .reserve(gpu, std::mem::size_of_val(draws.as_slice()) as u64);
@@ -514,7 +520,7 @@ impl Cull {
             eye_far: [f.eye.x, f.eye.y, f.eye.z, f.far],
             info: [
                 self.groups as u32,
-                f.pages.len() as u32,
+                f.runs.len() as u32,
                 draws.len() as u32,
                 self.layout_of_lists.per_species as u32,
             ],
@@ -543,8 +549,8 @@ impl Cull {
         }
         let q = &gpu.queue;
         q.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-        if !f.pages.is_empty() {
-            q.write_buffer(&self.pages.buffer, 0, bytemuck::cast_slice(f.pages));
+        if !f.runs.is_empty() {
+            q.write_buffer(&self.runs.buffer, 0, bytemuck::cast_slice(f.runs));
         }
         q.write_buffer(&self.lists.buffer, 0, bytemuck::cast_slice(&lists));
         if !draws.is_empty() {
@@ -558,7 +564,7 @@ impl Cull {
                 &[
                     self.params.as_entire_binding(),
                     pool.as_entire_binding(),
-                    self.pages.buffer.as_entire_binding(),
+                    self.runs.buffer.as_entire_binding(),
                     self.lists.buffer.as_entire_binding(),
                     self.counters.buffer.as_entire_binding(),
                     self.trees.buffer.as_entire_binding(),
@@ -579,11 +585,11 @@ impl Cull {
                 timestamp_writes: None,
             });
             pass.set_bind_group(0, bind, &[]);
-            if !f.pages.is_empty() {
+            if f.rows > 0 {
                 pass.set_pipeline(&self.cull);
-                // One workgroup row per page: the pool's binding limit keeps pages far below
-                // the 65,535 rows a dispatch allows (16.7M trees).
-                pass.dispatch_workgroups(super::PAGE / 64, f.pages.len() as u32, 1);
+                // One workgroup row per page of a run: the pool's binding limit keeps pages
+                // far below the 65,535 rows a dispatch allows (16.7M trees).
+                pass.dispatch_workgroups(super::PAGE / 64, f.rows, 1);
             }
             if sorted_capacity > 0 {
                 pass.set_pipeline(&self.sort_scan);
@@ -639,3 +645,15 @@ impl Cull {
 }
 
 const _: () = assert!(std::mem::size_of::<PoolTree>() == 32);
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_shader_s_page_is_the_pool_s() {
+        let line = format!("const PAGE: u32 = {}u;", super::super::PAGE);
+        assert!(
+            include_str!("cull.wgsl").contains(&line),
+            "cull.wgsl: {line}"
+        );
+    }
+}

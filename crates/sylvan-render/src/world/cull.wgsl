@@ -12,11 +12,13 @@ struct PoolTree {
     rot: vec4<f32>,
 }
 
-struct Page {
+// A run of consecutive pool trees (a tile's pages, or a run of them): its first tree, its
+// count, the passes that see it, and its first workgroup row (one row per PAGE trees).
+struct Run {
     first: u32,
     count: u32,
     passes: u32,
-    pad: u32,
+    row: u32,
 }
 
 struct List {
@@ -44,7 +46,7 @@ struct Params {
     planes: array<vec4<f32>, 30>,
     // xyz eye, w the camera pass's far distance
     eye_far: vec4<f32>,
-    // x groups per pass, y pages, z draws, w 1 when groups are species (else one mixed group)
+    // x groups per pass, y runs, z draws, w 1 when groups are species (else one mixed group)
     info: vec4<u32>,
     // x: camera-pass presence falls from 1 at this distance to 0 at eye_far.w (the world's
     // tree distance); infinite for a world drawn whole
@@ -69,11 +71,13 @@ struct Params {
 }
 
 const PASSES: u32 = 5u;
+// Trees per pool page (world/mod.rs `PAGE`): a workgroup row culls one page.
+const PAGE: u32 = 256u;
 const BUCKETS: u32 = 4096u;
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> pool: array<PoolTree>;
-@group(0) @binding(2) var<storage, read> pages: array<Page>;
+@group(0) @binding(2) var<storage, read> runs: array<Run>;
 @group(0) @binding(3) var<storage, read> lists: array<List>;
 // [lists' counts | BUCKETS bucket counts | BUCKETS bucket starts | trees occluded]
 @group(0) @binding(4) var<storage, read_write> counters: array<atomic<u32>>;
@@ -209,8 +213,19 @@ fn listed(t: PoolTree, presence: f32) -> PoolTree {
 
 @compute @workgroup_size(64)
 fn cull(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    let page = pages[wg.y];
-    let i = wg.x * 64u + li;
+    // The run holding this row: the last whose first row is at or before it.
+    var lo = 0u;
+    var hi = params.info.y;
+    while (hi - lo > 1u) {
+        let mid = (lo + hi) / 2u;
+        if (runs[mid].row <= wg.y) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let page = runs[lo];
+    let i = (wg.y - page.row) * PAGE + wg.x * 64u + li;
     if (i >= page.count) {
         return;
     }

@@ -215,6 +215,109 @@ pub struct World {
     pyramid: Option<hiz::DepthPyramid>,
     /// What the culls bind without one.
     no_pyramid: [wgpu::TextureView; 2],
+    /// The tiles wanted around the eye's tile (`None` before the first frame, or after one
+    /// that failed).
+    wanted: Option<Wanted>,
+    /// Whether a wanted tile may be missing: set when the wanted tiles change or a tile is
+    /// evicted, cleared by a frame that finds every wanted tile resident. While clear, a
+    /// frame asks for nothing.
+    asking: bool,
+    /// The producer's queue still holds tiles that are no longer wanted (its lock was busy).
+    cancel_due: bool,
+    /// The run records of a cull, kept between frames (no allocation per frame).
+    runs_scratch: Vec<cull::GpuRun>,
+    /// Counts the changes to `resident` (a tile inserted or evicted).
+    generation: u64,
+}
+
+/// The tiles within reach of any point of the eye's tile: made again only when the eye
+/// enters another tile (or the reach changes), so a frame's requests cost nothing per tile
+/// while the eye stays in one. Up to a tile wider than the reach from the eye itself: the
+/// prefetch ring gains up to a tile on the side the eye moves away from.
+struct Wanted {
+    eye_tile: TileKey,
+    reach: f32,
+    /// Nearest the eye's tile first.
+    tiles: Vec<TileKey>,
+    set: std::collections::HashSet<TileKey>,
+    /// The resident ones among `tiles`, in their order, as the per-pass tile cull reads them:
+    /// one contiguous copy (not a hash look-up and three heap vectors per tile per frame),
+    /// made again when a tile is inserted or evicted.
+    snapshot: Vec<SnapTile>,
+    /// The snapshot's species counts and runs of consecutive pages (`passes`, `row` 0), tile
+    /// after tile.
+    snap_species: Vec<u32>,
+    snap_runs: Vec<cull::GpuRun>,
+    /// [`World::generation`] the snapshot was made at (`u64::MAX`: never).
+    snap_generation: u64,
+}
+
+/// A resident tile in [`Wanted::snapshot`].
+struct SnapTile {
+    key: TileKey,
+    min: Vec3,
+    max: Vec3,
+    count: u32,
+    species: std::ops::Range<usize>,
+    runs: std::ops::Range<usize>,
+}
+
+impl Wanted {
+    fn new(eye_tile: TileKey, reach: f32, tiles: Vec<TileKey>) -> Self {
+        Self {
+            eye_tile,
+            reach,
+            set: tiles.iter().copied().collect(),
+            tiles,
+            snapshot: Vec::new(),
+            snap_species: Vec::new(),
+            snap_runs: Vec::new(),
+            snap_generation: u64::MAX,
+        }
+    }
+
+    /// Makes the snapshot again if the residents changed since it was made.
+    fn snap(&mut self, resident: &HashMap<TileKey, Resident>, generation: u64) {
+        if self.snap_generation == generation {
+            return;
+        }
+        self.snap_generation = generation;
+        self.snapshot.clear();
+        self.snap_species.clear();
+        self.snap_runs.clear();
+        for &key in &self.tiles {
+            let Some(r) = resident.get(&key) else {
+                continue;
+            };
+            let species = self.snap_species.len();
+            self.snap_species.extend(&r.species_counts);
+            let runs = self.snap_runs.len();
+            // Only a tile's last page is partial, so consecutive pages make one run.
+            let mut i = 0;
+            while i < r.pages.len() {
+                let mut j = i + 1;
+                while j < r.pages.len() && r.pages[j] == r.pages[j - 1] + 1 {
+                    j += 1;
+                }
+                let first = i as u32 * PAGE;
+                self.snap_runs.push(cull::GpuRun {
+                    first: r.pages[i] * PAGE,
+                    count: (r.count - first).min((j - i) as u32 * PAGE),
+                    passes: 0,
+                    row: 0,
+                });
+                i = j;
+            }
+            self.snapshot.push(SnapTile {
+                key,
+                min: r.min,
+                max: r.max,
+                count: r.count,
+                species: species..self.snap_species.len(),
+                runs: runs..self.snap_runs.len(),
+            });
+        }
+    }
 }
 
 impl World {
@@ -293,6 +396,11 @@ impl World {
             stats: WorldStats::default(),
             pyramid: None,
             no_pyramid: hiz::placeholder(gpu),
+            wanted: None,
+            asking: true,
+            cancel_due: false,
+            runs_scratch: Vec::new(),
+            generation: 0,
         })
     }
 
@@ -352,30 +460,6 @@ impl World {
             + self.seeds.as_ref().map_or(0, seed::GpuSeeds::bytes)
     }
 
-    /// Tiles within `range` of `eye` (horizontal), nearest first, with their distances.
-    fn tiles_within(&self, eye: Vec2, range: f32) -> Vec<(f32, TileKey)> {
-        let t = self.settings.tile_m;
-        let reach = |v: f32| ((v / t).floor() as i32).clamp(0, i32::MAX);
-        let r = range.min(1e9);
-        let lo = [reach(eye.x - r), reach(eye.y - r)];
-        let hi = [
-            (((eye.x + r) / t).floor() as i32).min(self.tiles[0] - 1),
-            (((eye.y + r) / t).floor() as i32).min(self.tiles[1] - 1),
-        ];
-        let mut out = Vec::new();
-        for z in lo[1]..=hi[1] {
-            for x in lo[0]..=hi[0] {
-                let key = TileKey { x, z };
-                let d = key.distance(eye, t);
-                if d <= range {
-                    out.push((d, key));
-                }
-            }
-        }
-        out.sort_by(|a, b| a.0.total_cmp(&b.0));
-        out
-    }
-
     /// Per frame: requests, receives, waits for and evicts tiles, then records the cull of
     /// every tree in the tiles each pass may see into `encoder`, and the indirect arguments of
     /// `draws` (per pass).
@@ -389,35 +473,66 @@ impl World {
         let range = self.settings.tree_distance_m.min(view.far);
         let mut stats = WorldStats::default();
         // 1. Ask for every tile within range plus the ring, nearest first; forget the rest.
-        // Tiles the GPU can seed are planned here instead (nearest first).
-        let wanted = self.tiles_within(eye, range + self.settings.prefetch_m);
+        // Tiles the GPU can seed are planned here instead (nearest first). Only while a
+        // wanted tile may be missing: once all are resident a frame asks for nothing.
+        let t = self.settings.tile_m;
+        let reach = range + self.settings.prefetch_m;
+        let eye_tile = TileKey::of(eye.x, eye.y, t);
+        let mut wanted = match self.wanted.take() {
+            Some(w) if w.eye_tile == eye_tile && w.reach == reach => w,
+            _ => {
+                let tiles = tiles_around(eye_tile, reach, t, self.tiles);
+                self.asking = true;
+                self.cancel_due = true;
+                Wanted::new(eye_tile, reach, tiles)
+            }
+        };
         let mut gpu_tiles = Vec::new();
-        let mut cpu_tiles = Vec::new();
-        for &(d, key) in &wanted {
-            if self.resident.contains_key(&key)
-                || self.arrived.iter().any(|a| a.key == key)
-                || self.seeding.iter().any(|b| b.keys.contains(&key))
-            {
-                continue;
+        if self.asking {
+            let in_flight: std::collections::HashSet<TileKey> = (self.arrived.iter())
+                .map(|a| a.key)
+                .chain(self.seeding.iter().flat_map(|b| b.keys.iter().copied()))
+                .collect();
+            let mut cpu_tiles = Vec::new();
+            let mut missing = false;
+            for &key in &wanted.tiles {
+                if self.resident.contains_key(&key) {
+                    continue;
+                }
+                missing = true;
+                if in_flight.contains(&key) {
+                    continue;
+                }
+                let d = key.distance(eye, t);
+                match self.gpu_seeds(key) {
+                    true => gpu_tiles.push((d, key)),
+                    false => cpu_tiles.push((d, key)),
+                }
             }
-            match self.gpu_seeds(key) {
-                true => gpu_tiles.push((d, key)),
-                false => cpu_tiles.push((d, key)),
-            }
+            gpu_tiles.sort_by(|a, b| a.0.total_cmp(&b.0));
+            cpu_tiles.sort_by(|a, b| a.0.total_cmp(&b.0));
+            self.producer.request(cpu_tiles);
+            self.asking = missing;
         }
-        self.producer.request(cpu_tiles);
-        let wanted_set: std::collections::HashSet<TileKey> = wanted.iter().map(|w| w.1).collect();
-        self.producer.cancel(|k| wanted_set.contains(&k));
+        if self.cancel_due {
+            self.cancel_due = !self.producer.cancel(|k| wanted.set.contains(&k));
+        }
         // 2. What arrived; then wait for tiles in range that a drawn pass sees.
         let fresh = self.producer.finished();
         stats.tiles_produced = fresh.len() as u32;
         self.arrived.extend(fresh);
-        let needed: Vec<(f32, TileKey)> = wanted.iter().filter(|w| w.0 <= range).copied().collect();
-        let visible: std::collections::HashSet<TileKey> = needed
-            .iter()
-            .map(|w| w.1)
-            .filter(|&k| !self.resident.contains_key(&k) && self.tile_may_be_seen(k, view))
-            .collect();
+        // (None missing when the frame asks for nothing: every wanted tile is resident.)
+        let visible: std::collections::HashSet<TileKey> = match self.asking {
+            true => (wanted.tiles.iter())
+                .filter(|&&k| {
+                    k.distance(eye, t) <= range
+                        && !self.resident.contains_key(&k)
+                        && self.tile_may_be_seen(k, view)
+                })
+                .copied()
+                .collect(),
+            false => Default::default(),
+        };
         let must: Vec<TileKey> = visible
             .iter()
             .copied()
@@ -431,10 +546,9 @@ impl World {
         }
         let resident = &self.resident;
         self.arrived
-            .retain(|t| wanted_set.contains(&t.key) && !resident.contains_key(&t.key));
+            .retain(|t| wanted.set.contains(&t.key) && !resident.contains_key(&t.key));
         // 3. This frame inserts every arrived tile a pass sees, and others (the ring) nearest
         // first within a per-frame byte budget, so a burst of arrivals is spread over frames.
-        let t = self.settings.tile_m;
         self.arrived.sort_by(|a, b| {
             let key = |x: &TileTrees| (!visible.contains(&x.key), x.key.distance(eye, t));
             let (ka, kb) = (key(a), key(b));
@@ -494,11 +608,12 @@ impl World {
         } else {
             f32::INFINITY
         };
-        let mut seen: Vec<(&Resident, u32, f32, f32)> = Vec::new();
-        for &(_, key) in &needed {
-            let Some(r) = self.resident.get(&key) else {
+        wanted.snap(&self.resident, self.generation);
+        let mut seen: Vec<(&SnapTile, u32, f32, f32)> = Vec::new();
+        for r in &wanted.snapshot {
+            if r.key.distance(eye, t) > range {
                 continue;
-            };
+            }
             let mut mask = 0u32;
             for (p, f) in view.frustums.iter().enumerate() {
                 let Some(f) = f else { continue };
@@ -530,26 +645,27 @@ impl World {
         for (request, cull) in self.requests.iter().zip(&mut self.culls) {
             let [w0, _, _, w3] = request.window;
             let groups = cull.groups();
-            let mut pages = Vec::new();
+            let mut runs = std::mem::take(&mut self.runs_scratch);
+            runs.clear();
+            let mut rows = 0;
             let mut capacity = vec![0u32; PASSES * groups];
             for &(r, mask, near, far) in &seen {
                 if far < w0 || near > w3 {
                     continue;
                 }
                 for p in (0..PASSES).filter(|p| mask & (1 << p) != 0) {
-                    for (s, &n) in r.species_counts.iter().enumerate() {
+                    for (s, &n) in wanted.snap_species[r.species.clone()].iter().enumerate() {
                         let group = if groups == 1 { 0 } else { s };
                         capacity[p * groups + group] += n;
                     }
                 }
-                for (i, &page) in r.pages.iter().enumerate() {
-                    let first = i as u32 * PAGE;
-                    pages.push(cull::GpuPage {
-                        first: page * PAGE,
-                        count: (r.count - first).min(PAGE),
+                for &run in &wanted.snap_runs[r.runs.clone()] {
+                    runs.push(cull::GpuRun {
                         passes: mask,
-                        _pad: 0,
+                        row: rows,
+                        ..run
                     });
+                    rows += run.count.div_ceil(PAGE);
                 }
             }
             cull.record(
@@ -563,14 +679,17 @@ impl World {
                     window: request.window,
                     frustums: view.frustums,
                     casters: view.casters,
-                    pages: &pages,
+                    runs: &runs,
+                    rows,
                     pool_generation: self.pool_pages as u64,
                     capacity: &capacity,
                     draws: &request.draws,
                     pyramid: &pyramid,
                 },
             )?;
+            self.runs_scratch = runs;
         }
+        self.wanted = Some(wanted);
         stats.tiles_resident = self.resident.len() as u32;
         stats.tiles_queued = self.arrived.len() as u32;
         stats.tiles_pending = self.producer.pending() as u32;
@@ -676,6 +795,7 @@ impl World {
             for ((key, mut pages), r) in batch.keys.into_iter().zip(batch.pages).zip(results) {
                 self.free_pages
                     .extend(pages.drain(r.count.div_ceil(PAGE) as usize..).rev());
+                self.generation += 1;
                 self.resident.insert(
                     key,
                     Resident {
@@ -722,6 +842,7 @@ impl World {
             );
             i = j;
         }
+        self.generation += 1;
         self.resident.insert(
             tile.key,
             Resident {
@@ -792,14 +913,37 @@ impl World {
             }
             if let Some(r) = self.resident.remove(&key) {
                 self.free_pages.extend(r.pages);
+                self.generation += 1;
                 evicted += 1;
             }
         }
+        // An evicted tile may still be wanted (the prefetch ring): ask again.
+        self.asking |= evicted > 0;
         evicted
     }
 }
 
 /// Tile workers per producer: the cores but one (the render thread's), 1 to 8.
+/// The tiles of a `tiles[0] × tiles[1]` grid of `tile_m` squares within `reach`
+/// (horizontal) of some point of tile `at`, nearest `at`'s centre first.
+fn tiles_around(at: TileKey, reach: f32, tile_m: f32, tiles: [i32; 2]) -> Vec<TileKey> {
+    let r = (reach / tile_m).min(1e6).ceil() as i32;
+    let mut out = Vec::new();
+    for z in (at.z - r).max(0)..=(at.z + r).min(tiles[1] - 1) {
+        for x in (at.x - r).max(0)..=(at.x + r).min(tiles[0] - 1) {
+            // The gap between the two squares along each axis.
+            let gap = |a: i32, b: i32| ((a - b).abs() - 1).max(0) as f32 * tile_m;
+            let d = Vec2::new(gap(x, at.x), gap(z, at.z)).length();
+            if d <= reach {
+                let c = Vec2::new((x - at.x) as f32, (z - at.z) as f32);
+                out.push((c.length_squared(), TileKey { x, z }));
+            }
+        }
+    }
+    out.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    out.into_iter().map(|(_, k)| k).collect()
+}
+
 pub(crate) fn worker_threads() -> usize {
     std::thread::available_parallelism()
         .map_or(1, |n| n.get())
@@ -861,7 +1005,55 @@ fn box_distance(p: Vec3, min: Vec3, max: Vec3) -> f32 {
 
 #[cfg(test)]
 mod tests {
-    use super::take_pages;
+    use super::{TileKey, take_pages, tiles_around};
+    use glam::Vec2;
+
+    #[test]
+    fn the_tiles_around_the_eye_s_tile_hold_every_tile_within_reach_of_the_eye() {
+        let (t, grid, reach) = (256.0, [40, 30], 1100.0);
+        let at = TileKey { x: 3, z: 20 };
+        let around = tiles_around(at, reach, t, grid);
+        let set: std::collections::HashSet<TileKey> = around.iter().copied().collect();
+        assert_eq!(set.len(), around.len(), "no tile twice");
+        assert_eq!(around[0], at, "the eye's tile first");
+        // Eyes over the tile (corners, edges, inside): every tile within reach of one is there.
+        let mut widest = 0.0f32;
+        for i in 0..=8 {
+            for j in 0..=8 {
+                let eye = Vec2::new(3.0 + i as f32 / 8.0, 20.0 + j as f32 / 8.0) * t;
+                for z in 0..grid[1] {
+                    for x in 0..grid[0] {
+                        let k = TileKey { x, z };
+                        let d = k.distance(eye, t);
+                        if d <= reach {
+                            assert!(set.contains(&k), "{k:?} at {d} m of {eye}");
+                        }
+                    }
+                }
+            }
+        }
+        // And nothing farther than reach from every point of the tile.
+        for k in &around {
+            let d = (0..=8)
+                .flat_map(|i| (0..=8).map(move |j| (i, j)))
+                .map(|(i, j)| {
+                    k.distance(
+                        Vec2::new(3.0 + i as f32 / 8.0, 20.0 + j as f32 / 8.0) * t,
+                        t,
+                    )
+                })
+                .fold(f32::INFINITY, f32::min);
+            assert!(d <= reach + 1e-3, "{k:?} is {d} m from the tile");
+            widest = widest.max(d);
+        }
+        assert!(widest > reach - t, "the reach is used");
+        // Clipped to the grid.
+        assert!(
+            around
+                .iter()
+                .all(|k| k.x >= 0 && k.z >= 0 && k.x < 40 && k.z < 30)
+        );
+    }
 
     #[test]
     fn pages_are_taken_consecutive_where_a_run_is_long_enough() {

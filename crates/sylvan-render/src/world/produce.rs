@@ -233,12 +233,12 @@ impl<T: Produced> Producer<T> {
     }
 
     /// Drops requests for tiles no longer wanted (not yet started).
-    /// Not waiting for the lock either: a request not cancelled now is cancelled at a later
-    /// call, or produced (and dropped by the caller).
-    pub fn cancel(&mut self, keep: impl Fn(TileKey) -> bool) {
+    /// Not waiting for the lock either: returns false when a worker held it (the queued
+    /// requests were not cancelled: call again later, or drop what they produce).
+    pub fn cancel(&mut self, keep: impl Fn(TileKey) -> bool) -> bool {
         self.deferred.retain(|&(_, k)| keep(k));
         let Ok(mut q) = self.queue.0.try_lock() else {
-            return;
+            return false;
         };
         let pending = &mut self.pending;
         q.waiting.retain(|&(_, k)| {
@@ -248,6 +248,7 @@ impl<T: Produced> Producer<T> {
             }
             kept
         });
+        true
     }
 
     /// Tiles finished since the last call, without waiting.
