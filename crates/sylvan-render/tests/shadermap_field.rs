@@ -284,6 +284,66 @@ fn the_field_covers_the_ground_as_the_local_species_do() {
     }
 }
 
+#[test]
+fn the_field_takes_the_local_species_colour() {
+    // The stand with green trees in its west half and the same trees with red leaves (species
+    // 1) in its east half, seen from above across the edge. The tables are measured for the
+    // 50/50 mix, whose mean albedo ρ̄ is the same on both sides: with it alone both halves'
+    // trees have one colour (the ground is the same too, so the red/green ratio of the halves
+    // is equal). With the local species' albedo (`density.rs`) the east half is redder, as the
+    // drawn trees are.
+    let gpu = gpu();
+    let mut scene = stand();
+    for t in &mut scene.trees {
+        if t.position.x >= 300.0 {
+            t.species = 1;
+        }
+    }
+    scene.species.push(scene.species[0].clone());
+    scene.camera = Camera {
+        position: Vec3::new(300.0, 500.0, 290.0),
+        look_at: Vec3::new(300.0, 0.0, 300.0),
+        fov_deg: 40.0,
+    };
+    let mut red = common::test_tree();
+    red.name = "test-tree-red".into();
+    for c in &mut red.leaves.colors {
+        *c = [0.4, 0.1, 0.05];
+    }
+    let plants = vec![common::test_tree(), red];
+    let halves = |technique: &str| {
+        let options = RenderOptions {
+            width: 64,
+            height: 64,
+            technique: technique.into(),
+            settings: settings(),
+            shadows: false,
+            cache: CachePolicy::Off,
+            ..Default::default()
+        };
+        let mut r = Renderer::new(&gpu, &scene, &plants, &options).expect("renderer");
+        r.render(&gpu, &scene.camera, &scene.sun).expect("frame");
+        let side = |x: u32| r.radiance_mean(&gpu, [x, 8, 20, 48]).expect("radiance");
+        let ratio = |c: [f32; 3]| c[0] / c[1].max(1e-6);
+        (ratio(side(2)), ratio(side(42)))
+    };
+    let (drawn, field) = (halves("zfield"), halves("shadermap"));
+    eprintln!("red/green per half (left, right): drawn {drawn:?}, field {field:?}");
+    let redder = |v: (f32, f32)| v.0.max(v.1) / v.0.min(v.1);
+    assert!(redder(drawn) > 1.3, "the red trees must show: {drawn:?}");
+    // The same half is the redder one, and by a like amount.
+    assert_eq!(
+        drawn.0 > drawn.1,
+        field.0 > field.1,
+        "{drawn:?} vs {field:?}"
+    );
+    let (d, f) = (redder(drawn).ln(), redder(field).ln());
+    assert!(
+        f >= 0.5 * d && f <= 1.5 * d,
+        "the field's halves differ by {f:.3} in log red/green, the trees' by {d:.3}"
+    );
+}
+
 /// The mean linear radiance over the central half of a 64² frame of the stand (or of
 /// `trees`) drawn by the chain `zfield` to `s_max`, the field beyond, from `camera`, with
 /// `extra` settings. Bakes are shared through `cache`.

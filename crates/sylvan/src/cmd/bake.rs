@@ -150,7 +150,7 @@ fn tables(args: BakeCmdArgs) -> anyhow::Result<()> {
     let gpu = sylvan_gpu::Gpu::new()?;
     let bar = BakeBar::new();
     let params = sylvan_render::technique::shadermap::scene::params(&settings)?;
-    let (t, r) = sylvan_render::technique::shadermap::bake_scene(
+    let (t, r, _) = sylvan_render::technique::shadermap::bake_scene(
         &gpu,
         &scene,
         &plants,

@@ -19,9 +19,18 @@
 //! density of the mix's trees that projects as much crown along the view as the local trees
 //! do. Where the local mix is the mix, it is Λ_h. Crowns are the plants' bounding boxes: a
 //! disk of the mean horizontal half-extent r on top, a 2r × height rectangle from the side.
+//!
+//! **Colour**: each texel also holds Σ Λⁱ aⁱ ρⁱ, the top crown areas weighted by each
+//! species' albedo (its `zfield` bake's mean), so the field's trees take the local species'
+//! colour — a stand of pale birches among dark pines stays pale to the horizon — instead of
+//! the mix's mean ρ̄ everywhere ([`DensityRaster::mean_albedo`] is the terrain's mean, which
+//! the field scales to ρ̄).
 
 use sylvan_plant::Plant;
 use sylvan_scene::Scene;
+
+/// Channels per texel of [`DensityRaster::texels`].
+pub const CHANNELS: usize = 6;
 
 /// Most texels per side of the raster.
 pub const MAX_TEXELS: u32 = 512;
@@ -53,22 +62,26 @@ impl CrownShape {
     }
 }
 
-/// Per texel: trees per m² and their summed crown areas per m² (top, side); texel centres at
-/// `(i + ½) size / n`, row-major from X = 0, Z = 0.
+/// Per texel: trees per m², their summed crown areas per m² (top, side) and the top areas
+/// weighted by albedo (linear RGB); texel centres at `(i + ½) size / n`, row-major from X = 0,
+/// Z = 0.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DensityRaster {
     /// Texels along X and Z, each 1 to [`MAX_TEXELS`].
     pub resolution: [u32; 2],
     /// The terrain's extent along X and Z, metres.
     pub size_m: [f32; 2],
-    /// Per texel [Λ_h (trees per m²), Σ Λⁱ aⁱ, Σ Λⁱ sⁱ (m² of crown per m²)], row-major.
-    pub texels: Vec<[f32; 3]>,
+    /// Per texel [Λ_h (trees per m²), Σ Λⁱ aⁱ, Σ Λⁱ sⁱ (m² of crown per m²), Σ Λⁱ aⁱ ρⁱ
+    /// (red, green, blue)], row-major.
+    pub texels: Vec<[f32; CHANNELS]>,
 }
 
 impl DensityRaster {
     /// The density of `scene`'s forest (one plant per species): its seeded species' densities
-    /// plus its placed trees.
-    pub fn of_scene(scene: &Scene, plants: &[Plant]) -> Self {
+    /// plus its placed trees; `albedo` per species (linear RGB; a species past its end counts
+    /// as white).
+    pub fn of_scene(scene: &Scene, plants: &[Plant], albedo: &[[f32; 3]]) -> Self {
+        let rho = |s: u32| albedo.get(s as usize).copied().unwrap_or([1.0; 3]);
         let shapes: Vec<CrownShape> = plants.iter().map(CrownShape::of).collect();
         let shape = |s: u32| {
             shapes.get(s as usize).copied().unwrap_or(CrownShape {
@@ -93,7 +106,7 @@ impl DensityRaster {
                 .map(|n| n.clamp(1, MAX_TEXELS))
         };
         let [nx, nz] = resolution.map(|n| n as usize);
-        let mut texels = vec![[0.0f32; 3]; nx * nz];
+        let mut texels = vec![[0.0f32; CHANNELS]; nx * nz];
         if !scene.trees.is_empty() {
             let cell_m2 = (size[0] / nx as f32) * (size[1] / nz as f32);
             for t in &scene.trees {
@@ -104,6 +117,9 @@ impl DensityRaster {
                 v[0] += 1.0 / cell_m2;
                 v[1] += c.top * h2 / cell_m2;
                 v[2] += c.side * h2 / cell_m2;
+                for (k, a) in rho(t.species).into_iter().enumerate() {
+                    v[3 + k] += a * c.top * h2 / cell_m2;
+                }
             }
             texels = tent(&texels, nx, nz);
         }
@@ -119,6 +135,9 @@ impl DensityRaster {
                 v[0] += d;
                 v[1] += d * c.top * h2;
                 v[2] += d * c.side * h2;
+                for (k, a) in rho(l.species).into_iter().enumerate() {
+                    v[3 + k] += a * d * c.top * h2;
+                }
             }
         }
         Self {
@@ -128,7 +147,8 @@ impl DensityRaster {
         }
     }
 
-    /// The highest of channel `c` (0: Λ_h, 1: top areas, 2: side areas).
+    /// The highest of channel `c` (0: Λ_h, 1: top areas, 2: side areas, 3–5: top areas ×
+    /// albedo).
     pub fn max(&self, c: usize) -> f32 {
         self.texels.iter().fold(0.0, |a, v| a.max(v[c]))
     }
@@ -142,6 +162,17 @@ impl DensityRaster {
             return [0.0; 2];
         }
         [(sum(1) / n) as f32, (sum(2) / n) as f32]
+    }
+
+    /// The trees' mean albedo over the terrain, weighted by top crown area (white without
+    /// trees).
+    pub fn mean_albedo(&self) -> [f32; 3] {
+        let sum = |c: usize| self.texels.iter().map(|v| v[c] as f64).sum::<f64>();
+        let top = sum(1);
+        if top <= 0.0 {
+            return [1.0; 3];
+        }
+        [3, 4, 5].map(|c| (sum(c) / top) as f32)
     }
 
     /// The highest effective density at any view angle: what the tables must reach.
@@ -174,14 +205,14 @@ impl DensityRaster {
 
 /// `values` (nx × nz) smoothed by the tent [1 2 1]² / 16, edges clamped (mass-preserving in
 /// the interior).
-fn tent(values: &[[f32; 3]], nx: usize, nz: usize) -> Vec<[f32; 3]> {
-    let pass = |src: &[[f32; 3]], dx: isize, dz: isize| -> Vec<[f32; 3]> {
+fn tent<const N: usize>(values: &[[f32; N]], nx: usize, nz: usize) -> Vec<[f32; N]> {
+    let pass = |src: &[[f32; N]], dx: isize, dz: isize| -> Vec<[f32; N]> {
         let at = |i: isize, j: isize| {
             let i = i.clamp(0, nx as isize - 1) as usize;
             let j = j.clamp(0, nz as isize - 1) as usize;
             src[j * nx + i]
         };
-        let mut out = vec![[0.0f32; 3]; src.len()];
+        let mut out = vec![[0.0f32; N]; src.len()];
         for z in 0..nz as isize {
             for x in 0..nx as isize {
                 let (a, b, c) = (at(x - dx, z - dz), at(x, z), at(x + dx, z + dz));
@@ -233,6 +264,45 @@ mod tests {
     }
 
     #[test]
+    fn each_texel_holds_its_own_species_albedo() {
+        // Species 0 (10 m, albedo red) on the west half, species 1 (the 2 m plant, blue) on the
+        // east: a texel's weighted albedo over its top area is its species' albedo, and the
+        // terrain's mean weighs them by top crown area.
+        let mut trees = Vec::new();
+        for i in 0..160 {
+            for j in 0..160 {
+                let mut t = tree(2.5 + 5.0 * i as f32, 2.5 + 5.0 * j as f32);
+                if t.position.x >= 400.0 {
+                    t.species = 1;
+                    t.height = 2.0;
+                }
+                trees.push(t);
+            }
+        }
+        let albedo = [[0.5, 0.1, 0.1], [0.1, 0.1, 0.5]];
+        let r = DensityRaster::of_scene(&scene_with(trees, 800.0), &plants(), &albedo);
+        let [nx, nz] = r.resolution.map(|n| n as usize);
+        for (x, want) in [(nx / 8, albedo[0]), (nx - 1 - nx / 8, albedo[1])] {
+            let v = r.texels[(nz / 2) * nx + x];
+            for c in 0..3 {
+                assert!(
+                    (v[3 + c] / v[1] - want[c]).abs() < 1e-4,
+                    "{v:?} vs {want:?}"
+                );
+            }
+        }
+        let areas = [0, 1].map(|s| {
+            let c = CrownShape::of(&plants()[s]);
+            c.top * [100.0f32, 4.0][s]
+        });
+        let mean = r.mean_albedo();
+        for c in 0..3 {
+            let want = (areas[0] * albedo[0][c] + areas[1] * albedo[1][c]) / (areas[0] + areas[1]);
+            assert!((mean[c] - want).abs() < 1e-3 * want.max(0.1), "{mean:?}");
+        }
+    }
+
+    #[test]
     fn placed_trees_give_their_density_where_they_are_and_none_elsewhere() {
         // A 5 m grid (400 trees/ha) over the east half of 800 m (25 m cells: 25 trees each).
         let mut trees = Vec::new();
@@ -241,7 +311,7 @@ mod tests {
                 trees.push(tree(402.5 + 5.0 * i as f32, 2.5 + 5.0 * j as f32));
             }
         }
-        let r = DensityRaster::of_scene(&scene_with(trees, 800.0), &plants());
+        let r = DensityRaster::of_scene(&scene_with(trees, 800.0), &plants(), &[]);
         assert_eq!(r.resolution, [32, 32]);
         let inside = r.at(0, 600.0, 400.0);
         assert!((inside - 0.04).abs() < 1e-5, "{inside}");
@@ -260,9 +330,10 @@ mod tests {
 
     #[test]
     fn the_raster_is_bounded_whatever_the_terrain() {
-        let r = DensityRaster::of_scene(&scene_with(vec![tree(5.0, 5.0)], 100_000.0), &plants());
+        let r =
+            DensityRaster::of_scene(&scene_with(vec![tree(5.0, 5.0)], 100_000.0), &plants(), &[]);
         assert_eq!(r.resolution, [MAX_TEXELS, MAX_TEXELS]);
-        let r = DensityRaster::of_scene(&scene_with(vec![tree(5.0, 5.0)], 10.0), &plants());
+        let r = DensityRaster::of_scene(&scene_with(vec![tree(5.0, 5.0)], 10.0), &plants(), &[]);
         assert_eq!(r.resolution, [1, 1]);
         assert!((r.at(0, 0.0, 0.0) - 0.01).abs() < 1e-6);
     }
@@ -294,7 +365,7 @@ mod tests {
         s.seeded = SeededForest::new([300.0; 2], &layouts, 1, &[])
             .unwrap()
             .map(std::sync::Arc::new);
-        let r = DensityRaster::of_scene(&s, &plants());
+        let r = DensityRaster::of_scene(&s, &plants(), &[]);
         assert_eq!(r.resolution, [3, 2]);
         // Texel centres at 50, 150, 250 m: the map (edge-sampled) is 1/6, 1/2, 5/6 there.
         // Crown areas per tree: species 0 (r̂ 0.3, E[h²] = 364/3) top 0.2827 × 121.3, side
@@ -302,7 +373,7 @@ mod tests {
         let (h0, h1) = (364.0 / 3.0, 61.0 / 3.0);
         let pi = std::f32::consts::PI;
         for (i, want) in [1.0 / 6.0, 0.5, 5.0 / 6.0].into_iter().enumerate() {
-            let [d, top, side] = r.texels[i];
+            let [d, top, side, ..] = r.texels[i];
             let (d0, d1) = (want * 0.04, 0.01);
             assert!((d - (d0 + d1)).abs() < 1e-5, "{i}: {d}");
             let top_want = d0 * 0.09 * pi * h0 + d1 * pi * h1;
@@ -320,7 +391,7 @@ mod tests {
         let s = Scene::builtin_grove();
         // The built-in scene's trees are placed from its maps: the binned density averages
         // to the trees over the area.
-        let r = DensityRaster::of_scene(&s, &plants());
+        let r = DensityRaster::of_scene(&s, &plants(), &[]);
         let area = s.terrain.size[0] * s.terrain.size[1];
         let cells = (r.resolution[0] * r.resolution[1]) as f32;
         let mean = r.texels.iter().map(|v| v[0]).sum::<f32>() / cells;

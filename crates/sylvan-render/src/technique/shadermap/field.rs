@@ -37,8 +37,9 @@ pub struct Handover {
 
 /// The field's GPU resources: group 1 of the terrain's forest pipeline, group 2 of the
 /// `zfield` trees before it. Binding 0 the field's parameters, 1–4 the tables, 5 the density
-/// raster (`Rgba16Float`: Λ_h and the crown areas, each over its peak; sampled with the
-/// tables' clamped linear sampler).
+/// raster (`Rgba16Float`, two layers: Λ_h and the crown areas, each over its peak; the top
+/// areas weighted by the local albedo over the terrain's mean; sampled with the tables'
+/// clamped linear sampler).
 #[derive(Clone)]
 pub struct ForestField {
     /// The group's layout (binding 0 the field, 1–4 the tables, 5 the density).
@@ -70,11 +71,15 @@ impl ForestField {
             5,
             all,
             wgpu::TextureSampleType::Float { filterable: true },
-            wgpu::TextureViewDimension::D2,
+            wgpu::TextureViewDimension::D2Array,
         ));
         let peaks = [0, 1, 2].map(|c| density.max(c));
         let norm = peaks.map(|p| if p > 0.0 { 1.0 / p } else { 0.0 });
-        let bits: Vec<u16> = density
+        // Layer 1: the top areas weighted by albedo over the terrain's mean albedo, on layer
+        // 0's top-area scale (so layer 1 / layer 0's g is the local albedo over the mean).
+        let mean = density.mean_albedo();
+        let tint = mean.map(|m| if m > 0.0 { norm[1] / m } else { 0.0 });
+        let mut bits: Vec<u16> = density
             .texels
             .iter()
             .flat_map(|v| {
@@ -86,16 +91,27 @@ impl ForestField {
                 ]
             })
             .collect();
+        bits.extend(density.texels.iter().flat_map(|v| {
+            [
+                f32_to_f16(v[3] * tint[0]),
+                f32_to_f16(v[4] * tint[1]),
+                f32_to_f16(v[5] * tint[2]),
+                0,
+            ]
+        }));
         let [w, h] = density.resolution;
         let raster = crate::texture::upload_raw(
             gpu,
             "shadermap_density",
-            [w, h, 1],
+            [w, h, 2],
             wgpu::TextureDimension::D2,
             wgpu::TextureFormat::Rgba16Float,
             bytemuck::cast_slice(&bits),
         );
-        let raster_view = raster.create_view(&Default::default());
+        let raster_view = raster.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        });
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("shadermap_field"),
             entries: &entries,

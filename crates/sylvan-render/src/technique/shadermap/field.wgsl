@@ -2,7 +2,8 @@
 // fractions of ground seen and lit (𝔾, its diagonal), of trees lit (𝕋), and the sky on ground
 // and trees (𝔻, 𝔼), for the local tree density, lighting the ground with the terrain's own
 // albedo and the trees with the mix's mean albedo ρ̄ — `zfield`'s lighting model averaged over
-// a forest. Nearer than s_max, where trees are drawn, the ground converges to the field's mean
+// a forest (the local species' albedo where they differ from the mix: `field_tree_albedo`).
+// Nearer than s_max, where trees are drawn, the ground converges to the field's mean
 // (eq. 24–25) and takes the trees' share as they fade (eq. 26–27).
 // Group 1: binding 0 the field, bindings 1–4 the tables (`field_tables.wgsl`,
 // `field_common.wgsl`).
@@ -33,7 +34,7 @@ fn forest_radiance(xz: vec2<f32>, n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, grou
     let sun_mean = sun_open * vis_mean * lit_share;
     let ig = mix(sun_g, sun_mean, h.x);
     let jg = sky_g * t.ground_sky * mix(contrast, 1.0, h.x);
-    let trees = forest_trees(t, field.tree_albedo.rgb, v, l, vis_mean);
+    let trees = forest_trees(t, field_tree_albedo(xz), v, l, vis_mean);
     let mu = field_tree_share(t, h.y);
     return (1.0 - mu) * (ig + jg) + mu * trees;
 }

@@ -10,7 +10,8 @@ struct FieldParams {
     // x, y: the raster's g and b scales (Σ Λⁱ aⁱ, Σ Λⁱ sⁱ: crown areas per m² from the top
     // and the side); z, w: the mix's mean crown areas ā, s̄ (m²; 0 without crowns).
     crowns: vec4<f32>,
-    // rgb: ρ̄, the trees' mean albedo (linear).
+    // rgb: ρ̄, the trees' mean albedo (linear): the mix's, where the local species are the
+    // mix (`field_tree_albedo`).
     tree_albedo: vec4<f32>,
     // x: `zfield.sun_scale`; y: `zfield.sky_scale`; z: a1; w: a2 (eq. 8).
     light: vec4<f32>,
@@ -23,14 +24,28 @@ struct FieldParams {
 };
 
 @group(FIELD) @binding(0) var<uniform> field: FieldParams;
-// Λ_h and the crown areas over the terrain (`density.rs`), normalised by `field.density.x`,
-// `field.crowns.xy`.
-@group(FIELD) @binding(5) var field_density_map: texture_2d<f32>;
+// Layer 0: Λ_h and the crown areas over the terrain (`density.rs`), normalised by
+// `field.density.x`, `field.crowns.xy`; layer 1: the top areas weighted by albedo over the
+// terrain's mean albedo, on layer 0's top-area scale.
+@group(FIELD) @binding(5) var field_density_map: texture_2d_array<f32>;
 
 // The field's raster at ground point `xz` (`density.rs`): r Λ_h, g Σ Λⁱ aⁱ, b Σ Λⁱ sⁱ, each
 // over its scale.
 fn field_raster(xz: vec2<f32>) -> vec4<f32> {
-    return textureSampleLevel(field_density_map, table_sampler, xz * field.density.yz, 0.0);
+    return textureSampleLevel(field_density_map, table_sampler, xz * field.density.yz, 0, 0.0);
+}
+
+// The trees' albedo at ground point `xz`: the local species' mean (Σ Λⁱ aⁱ ρⁱ / Σ Λⁱ aⁱ,
+// `density.rs`) relative to the terrain's mean, times ρ̄ — so where the local species are the
+// mix it is ρ̄, which the tables were measured with; ρ̄ where no crowns are.
+fn field_tree_albedo(xz: vec2<f32>) -> vec3<f32> {
+    let uv = xz * field.density.yz;
+    let top = textureSampleLevel(field_density_map, table_sampler, uv, 0, 0.0).g;
+    let tinted = textureSampleLevel(field_density_map, table_sampler, uv, 1, 0.0).rgb;
+    if (top <= 1e-4) {
+        return field.tree_albedo.rgb;
+    }
+    return clamp(field.tree_albedo.rgb * tinted / top, vec3<f32>(0.0), vec3<f32>(1.0));
 }
 
 // The density the tables are looked up at, trees per m², from a `field_raster` sample `t`,

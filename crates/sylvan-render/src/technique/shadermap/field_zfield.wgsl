@@ -4,7 +4,8 @@
 // takes their share (eq. 26–27, `field.wgsl`).
 
 // Eq. 22–23: Ĩ_t = (1 − ν) I_t + ν Ī_t 𝕋, J̃_t = (1 − ν) J_t + ν J̄_t, the means with the
-// field's own albedo ρ̄, as BN12's Ī_t and J̄_t are, on flat ground (the terrain's normal is not
+// field's own albedo (ρ̄ scaled to the local species, `field_tree_albedo`), as BN12's Ī_t
+// and J̄_t are, on flat ground (the terrain's normal is not
 // known here). With the pixel's own albedo instead, the band was 12 % (R), 3 % (G), 8 % (B)
 // darker than the field near s_max on scene E1 (M4): ρ̄ is the mean over all 181 baked views,
 // and what the crowns show at the band's grazing views is darker. `albedo` is unused (kept so
@@ -18,7 +19,7 @@ fn field_tree_light(sun: vec3<f32>, sky: vec3<f32>, albedo: vec3<f32>, world: ve
         return sun + sky;
     }
     let t = forest_terms(world.xz, v, l, vec3<f32>(0.0, 1.0, 0.0));
-    return mix(sun + sky, forest_trees(t, field.tree_albedo.rgb, v, l, field_sun_visibility(vis, s)), nu);
+    return mix(sun + sky, forest_trees(t, field_tree_albedo(world.xz), v, l, field_sun_visibility(vis, s)), nu);
 }
 
 // The opacity factor of a tree whose trunk base is at `base` (§7's fade, by the tree's own

@@ -116,7 +116,7 @@ fn crown(s: &MixSpecies<'_>) -> Result<Crown, RenderError> {
 
 /// A species' mean albedo (linear RGB): its views' premultiplied sRGB albedo decoded and
 /// divided by their coverage, over every view.
-fn mean_albedo(z: &ZFieldBaked) -> [f64; 3] {
+pub(super) fn mean_albedo(z: &ZFieldBaked) -> [f64; 3] {
     let (mut sum, mut alpha) = ([0.0f64; 3], 0.0f64);
     for v in &z.views {
         if let Some(level) = v.levels.first() {

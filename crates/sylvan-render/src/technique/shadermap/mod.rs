@@ -20,8 +20,10 @@
 //! **The field** ([`field`], `field.wgsl`): per terrain pixel eq. 2–5 (view and sun zeniths
 //! and their azimuth in the transformed space, the slope factor), then eq. 13
 //! `L = k_g Ī_g + (k_g + k_ḡ) J̄_g + (1 − k_g − k_ḡ)(𝕋 Ī_t + J̄_t)` with the ground's own albedo,
-//! sun (eq. 17) and sky × 𝔻 (eq. 19), and the trees' mean albedo ρ̄ with `zfield`'s sun scale and
-//! hotspot (eq. 20) and sky scale × 𝔼 (eq. 21).
+//! sun (eq. 17) and sky × 𝔻 (eq. 19), and the trees' albedo with `zfield`'s sun scale and
+//! hotspot (eq. 20) and sky scale × 𝔼 (eq. 21) — the mix's mean ρ̄ scaled by the local
+//! species' albedo over the terrain's mean ([`density`]'s colour layer), so where the local
+//! trees are the mix it is ρ̄ and a stand of another colour keeps it to the horizon.
 //!
 //! **As the last band of `auto`** (§7, e.g. `["zfield:0-1500", "shadermap:1500-"]`): the chain
 //! builds the field first and hands it to the bands before it. `zfield` trees converge to the
@@ -81,8 +83,12 @@
 //!   trees fading as (1 − w) plus the ground's share keep the tree fraction c at every w
 //!   (BN12's μ = c w dips to c − c²/4 at w = ½). The fade goes by each tree's trunk distance
 //!   (a tree fades as one), the ground's by the pixel's.
-//! - Eq. 22–23's means take the field's ρ̄ (as BN12's Ī_t, J̄_t do) and assume flat ground
-//!   (the zfield shader does not know the terrain normal).
+//! - Eq. 22–23's means take the field's albedo there (ρ̄ scaled to the local species, as BN12's
+//!   Ī_t, J̄_t take the field's) and assume flat ground (the zfield shader does not know the
+//!   terrain normal).
+//! - The trees' albedo per pixel is ρ̄ × (Σ Λⁱ aⁱ ρⁱ / Σ Λⁱ aⁱ) / (the terrain's mean of the same):
+//!   BN12 keeps a density channel per species and tables per model, so each species is lit
+//!   with its own; here one table set, with the colour of the local species mix.
 //! - One table set and one density for the species summed (BN12: a channel per species,
 //!   tables per model), corrected to first order by the local crown areas ([`density`]).
 //! - One table set for the scene's species mix, h and A area-weighted over it (BN12 §10 allows
@@ -263,7 +269,7 @@ pub const ENTRY: super::registry::Entry = super::registry::Entry {
     schema: super::params::schema::<ShaderMapBakeParams, ShaderMapDrawParams>,
     check: scene::check_settings,
     build: |cx| {
-        let (tables, report) = bake_scene(
+        let (tables, report, albedo) = bake_scene(
             cx.gpu,
             cx.scene,
             cx.plants,
@@ -280,7 +286,7 @@ pub const ENTRY: super::registry::Entry = super::registry::Entry {
             "shadermap",
             &cx.settings_for("shadermap"),
         )?;
-        let density = density::DensityRaster::of_scene(cx.scene, cx.plants);
+        let density = density::DensityRaster::of_scene(cx.scene, cx.plants, &albedo);
         // Alone (start 0) the field draws everything; as a chain's last band it takes over
         // from the trees at its start.
         let handover = field::Handover {

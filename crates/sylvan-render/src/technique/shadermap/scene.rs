@@ -2,7 +2,7 @@
 //! and peak density, and the tables baked for it (`sylvan bake --technique shadermap`).
 
 use super::density::DensityRaster;
-use super::measure::{ForestMix, MixSpecies, load_or_measure};
+use super::measure::{ForestMix, MixSpecies, load_or_measure, mean_albedo};
 use super::{ShaderMapBakeParams, ShaderMapDrawParams, ShaderMapTables};
 use crate::RenderError;
 use crate::bake::{BakeReport, CachePolicy, load_or_bake};
@@ -40,7 +40,7 @@ pub struct SceneMix {
 /// seeded species, their maps' peak — so the field never looks the tables up beyond their last
 /// node.
 pub fn scene_mix(scene: &Scene, plants: &[Plant]) -> Result<SceneMix, RenderError> {
-    let raster = DensityRaster::of_scene(scene, plants);
+    let raster = DensityRaster::of_scene(scene, plants, &[]);
     let raster_peak = raster.peak_effective();
     if let Some(seeded) = &scene.seeded {
         let layouts = seeded.layouts();
@@ -89,7 +89,9 @@ pub fn scene_mix(scene: &Scene, plants: &[Plant]) -> Result<SceneMix, RenderErro
 }
 
 /// The tables for `scene` (plants: one per species): the `zfield` bakes of its species (read
-/// or baked, `zfield.*` settings apply), then the tables (`shadermap.*` settings).
+/// or baked, `zfield.*` settings apply), then the tables (`shadermap.*` settings); with them,
+/// each species' mean albedo (linear RGB, from its `zfield` bake as the tables' ρ̄ is; the
+/// mix's ρ̄ for a species without trees), indexed like `plants`.
 ///
 /// `settings` are the scene's own `[technique.*]` tables then the command line's; the `zfield`
 /// bakes go through `zfield_policy` (the cache), the tables through `tables_policy` (the
@@ -102,7 +104,7 @@ pub fn bake_scene(
     zfield_policy: &CachePolicy,
     tables_policy: &CachePolicy,
     progress: &mut dyn FnMut(&str, usize, usize),
-) -> Result<(ShaderMapTables, BakeReport), RenderError> {
+) -> Result<(ShaderMapTables, BakeReport, Vec<[f32; 3]>), RenderError> {
     let of =
         |name: &str| -> Vec<&Setting> { settings.iter().filter(|s| s.technique == name).collect() };
     let params = self::params(settings)?;
@@ -135,9 +137,14 @@ pub fn bake_scene(
         radius_m: mix.radius_m,
         lambda_max: mix.lambda_max,
     };
-    load_or_measure(gpu, &forest, &params, tables_policy, &mut |d, t| {
+    let (tables, report) = load_or_measure(gpu, &forest, &params, tables_policy, &mut |d, t| {
         progress("shadermap tables", d, t)
-    })
+    })?;
+    let mut albedo = vec![tables.tree_albedo; plants.len()];
+    for (s, z) in mix.species.iter().zip(&zfields) {
+        albedo[s.species] = mean_albedo(z).map(|v| v as f32);
+    }
+    Ok((tables, report, albedo))
 }
 
 /// The table parameters `settings` give (defaults for the keys they do not set).
