@@ -7,6 +7,10 @@
 //! species); a compute pass culls the *trees* of those tiles, appends the survivors to their
 //! lists and writes indirect draw arguments. Nothing per frame is per tree on the CPU, and
 //! nothing at start or per frame depends on the size of the world — only on the tiles in range.
+//! Even per tile a static frame does little: the wanted tiles are listed when the eye enters
+//! another tile, asked for only while one is missing, and culled per pass from a contiguous
+//! snapshot made when a tile is inserted or evicted (`Wanted`); the cull gets one record per
+//! run of consecutive pool pages.
 //!
 //! This is the producer/cache design of BN12 §4 (and Proland's tile producers) applied to tree
 //! instances. Deviations and limits:
