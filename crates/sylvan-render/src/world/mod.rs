@@ -297,20 +297,14 @@ impl Wanted {
             self.snap_species.extend(&r.species_counts);
             let runs = self.snap_runs.len();
             // Only a tile's last page is partial, so consecutive pages make one run.
-            let mut i = 0;
-            while i < r.pages.len() {
-                let mut j = i + 1;
-                while j < r.pages.len() && r.pages[j] == r.pages[j - 1] + 1 {
-                    j += 1;
-                }
-                let first = i as u32 * PAGE;
+            for run in page_runs(&r.pages) {
+                let first = run.start as u32 * PAGE;
                 self.snap_runs.push(cull::GpuRun {
-                    first: r.pages[i] * PAGE,
-                    count: (r.count - first).min((j - i) as u32 * PAGE),
+                    first: r.pages[run.start] * PAGE,
+                    count: (r.count - first).min(run.len() as u32 * PAGE),
                     passes: 0,
                     row: 0,
                 });
-                i = j;
             }
             self.snapshot.push(SnapTile {
                 key,
@@ -832,19 +826,14 @@ impl World {
         let n = tile.trees.len() as u32;
         let pages = self.alloc_pages(gpu, n)?;
         // One write per run of consecutive pages (usually the whole tile).
-        let mut i = 0;
-        while i < pages.len() {
-            let mut j = i + 1;
-            while j < pages.len() && pages[j] == pages[j - 1] + 1 {
-                j += 1;
-            }
-            let chunk = &tile.trees[i * PAGE as usize..(j * PAGE as usize).min(n as usize)];
+        for run in page_runs(&pages) {
+            let chunk =
+                &tile.trees[run.start * PAGE as usize..(run.end * PAGE as usize).min(n as usize)];
             gpu.queue.write_buffer(
                 &self.pool,
-                pages[i] as u64 * PAGE as u64 * TREE_BYTES,
+                pages[run.start] as u64 * PAGE as u64 * TREE_BYTES,
                 bytemuck::cast_slice(chunk),
             );
-            i = j;
         }
         self.generation += 1;
         self.resident.insert(
@@ -948,6 +937,22 @@ fn tiles_around(at: TileKey, reach: f32, tile_m: f32, tiles: [i32; 2]) -> Vec<Ti
     out.into_iter().map(|(_, k)| k).collect()
 }
 
+/// The runs of consecutive page numbers in `pages` (index ranges into it), in order.
+fn page_runs(pages: &[u32]) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
+    let mut i = 0;
+    std::iter::from_fn(move || {
+        if i >= pages.len() {
+            return None;
+        }
+        let start = i;
+        i += 1;
+        while i < pages.len() && pages[i] == pages[i - 1] + 1 {
+            i += 1;
+        }
+        Some(start..i)
+    })
+}
+
 pub(crate) fn worker_threads() -> usize {
     std::thread::available_parallelism()
         .map_or(1, |n| n.get())
@@ -1009,7 +1014,7 @@ fn box_distance(p: Vec3, min: Vec3, max: Vec3) -> f32 {
 
 #[cfg(test)]
 mod tests {
-    use super::{TileKey, take_pages, tiles_around};
+    use super::{TileKey, page_runs, take_pages, tiles_around};
     use glam::Vec2;
 
     #[test]
@@ -1057,6 +1062,13 @@ mod tests {
                 .iter()
                 .all(|k| k.x >= 0 && k.z >= 0 && k.x < 40 && k.z < 30)
         );
+    }
+
+    #[test]
+    fn page_runs_split_where_pages_stop_being_consecutive() {
+        let runs: Vec<_> = page_runs(&[4, 5, 6, 9, 2, 3, 8]).collect();
+        assert_eq!(runs, vec![0..3, 3..4, 4..6, 6..7]);
+        assert_eq!(page_runs(&[]).count(), 0);
     }
 
     #[test]
