@@ -49,8 +49,11 @@ pub const PAGE: u32 = 256;
 /// Passes the lists serve: the camera and each cascade.
 pub const PASSES: usize = 1 + CASCADES;
 /// Tiles of the prefetch ring inserted into the pool per frame, at most (bytes; tiles a pass
-/// sees are always inserted at once).
-const INSERT_BYTES_PER_FRAME: u64 = 1 << 20;
+/// sees are always inserted at once). Above the ring's arrival rate on a fast flight (about 7
+/// tiles of 0.2 MB per frame over forest-10m at 100 m per frame): at 1 MiB the backlog grew
+/// until its tiles came into view and a frame inserted 12 at once (2.6–2.9× the median CPU
+/// time, BENCHMARKS "Streaming").
+const INSERT_BYTES_PER_FRAME: u64 = 2 << 20;
 
 /// Tiles of the prefetch ring seeded on the GPU per frame, at most, and batches of them in
 /// flight (their results are read in a later frame, without waiting; tiles a pass sees are
