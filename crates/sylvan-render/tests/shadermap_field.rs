@@ -230,18 +230,14 @@ fn the_field_is_where_the_trees_are() {
     );
 }
 
-#[test]
-fn the_field_covers_the_ground_as_the_local_species_do() {
-    // The stand with 10 m trees in its west half and 4 m ones (the same plant, species 1) in
-    // its east half, seen from above across the edge: the tables are measured for the 50/50
-    // mix, so with the summed density alone both halves would get the mix's coverage; with the
-    // local crown areas (`density.rs`) each half's field coverage follows the drawn trees'.
-    let gpu = gpu();
+/// The stand with species 1 (the same plant; `east_height` metres tall if given) in its east
+/// half, seen from above across the edge.
+fn halves_scene(east_height: Option<f32>) -> sylvan_scene::Scene {
     let mut scene = stand();
     for t in &mut scene.trees {
         if t.position.x >= 300.0 {
             t.species = 1;
-            t.height = 4.0;
+            t.height = east_height.unwrap_or(t.height);
         }
     }
     scene.species.push(scene.species[0].clone());
@@ -250,22 +246,52 @@ fn the_field_covers_the_ground_as_the_local_species_do() {
         look_at: Vec3::new(300.0, 0.0, 300.0),
         fov_deg: 40.0,
     };
+    scene
+}
+
+/// The mean linear radiance of the left and right thirds of a 64² frame of `scene` drawn by
+/// `technique` (no shadows, no cache), in `debug` view.
+fn halves_means(
+    gpu: &sylvan_gpu::Gpu,
+    scene: &sylvan_scene::Scene,
+    plants: &[sylvan_plant::Plant],
+    technique: &str,
+    debug: sylvan_render::DebugView,
+) -> ([f32; 3], [f32; 3]) {
+    let options = RenderOptions {
+        width: 64,
+        height: 64,
+        technique: technique.into(),
+        settings: settings(),
+        shadows: false,
+        cache: CachePolicy::Off,
+        debug,
+        ..Default::default()
+    };
+    let mut r = Renderer::new(gpu, scene, plants, &options).expect("renderer");
+    r.render(gpu, &scene.camera, &scene.sun).expect("frame");
+    let side = |x: u32| r.radiance_mean(gpu, [x, 8, 20, 48]).expect("radiance");
+    (side(2), side(42))
+}
+
+#[test]
+fn the_field_covers_the_ground_as_the_local_species_do() {
+    // The stand with 10 m trees in its west half and 4 m ones (the same plant, species 1) in
+    // its east half, seen from above across the edge: the tables are measured for the 50/50
+    // mix, so with the summed density alone both halves would get the mix's coverage; with the
+    // local crown areas (`density.rs`) each half's field coverage follows the drawn trees'.
+    let gpu = gpu();
+    let scene = halves_scene(Some(4.0));
     let plants = vec![common::test_tree(), common::test_tree()];
     let coverage = |technique: &str| {
-        let options = RenderOptions {
-            width: 64,
-            height: 64,
-            technique: technique.into(),
-            settings: settings(),
-            shadows: false,
-            cache: CachePolicy::Off,
-            debug: sylvan_render::DebugView::Coverage,
-            ..Default::default()
-        };
-        let mut r = Renderer::new(&gpu, &scene, &plants, &options).expect("renderer");
-        r.render(&gpu, &scene.camera, &scene.sun).expect("frame");
-        let side = |x: u32| r.radiance_mean(&gpu, [x, 8, 20, 48]).expect("radiance")[0];
-        (side(2), side(42))
+        let (a, b) = halves_means(
+            &gpu,
+            &scene,
+            &plants,
+            technique,
+            sylvan_render::DebugView::Coverage,
+        );
+        (a[0], b[0])
     };
     let (drawn, field) = (coverage("zfield"), coverage("shadermap"));
     eprintln!("covered share (left, right): drawn {drawn:?}, field {field:?}");
@@ -293,18 +319,7 @@ fn the_field_takes_the_local_species_colour() {
     // is equal). With the local species' albedo (`density.rs`) the east half is redder, as the
     // drawn trees are.
     let gpu = gpu();
-    let mut scene = stand();
-    for t in &mut scene.trees {
-        if t.position.x >= 300.0 {
-            t.species = 1;
-        }
-    }
-    scene.species.push(scene.species[0].clone());
-    scene.camera = Camera {
-        position: Vec3::new(300.0, 500.0, 290.0),
-        look_at: Vec3::new(300.0, 0.0, 300.0),
-        fov_deg: 40.0,
-    };
+    let scene = halves_scene(None);
     let mut red = common::test_tree();
     red.name = "test-tree-red".into();
     for c in &mut red.leaves.colors {
@@ -312,20 +327,15 @@ fn the_field_takes_the_local_species_colour() {
     }
     let plants = vec![common::test_tree(), red];
     let halves = |technique: &str| {
-        let options = RenderOptions {
-            width: 64,
-            height: 64,
-            technique: technique.into(),
-            settings: settings(),
-            shadows: false,
-            cache: CachePolicy::Off,
-            ..Default::default()
-        };
-        let mut r = Renderer::new(&gpu, &scene, &plants, &options).expect("renderer");
-        r.render(&gpu, &scene.camera, &scene.sun).expect("frame");
-        let side = |x: u32| r.radiance_mean(&gpu, [x, 8, 20, 48]).expect("radiance");
+        let (a, b) = halves_means(
+            &gpu,
+            &scene,
+            &plants,
+            technique,
+            sylvan_render::DebugView::None,
+        );
         let ratio = |c: [f32; 3]| c[0] / c[1].max(1e-6);
-        (ratio(side(2)), ratio(side(42)))
+        (ratio(a), ratio(b))
     };
     let (drawn, field) = (halves("zfield"), halves("shadermap"));
     eprintln!("red/green per half (left, right): drawn {drawn:?}, field {field:?}");
