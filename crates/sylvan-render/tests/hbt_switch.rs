@@ -43,6 +43,7 @@ fn at_the_switch(
             spp,
             technique: kind.into(),
             settings: q.settings(),
+            cpu_driven: q.cpu_driven(),
             cache: CachePolicy::Dir(dir.clone()),
             ..Default::default()
         };
@@ -434,6 +435,7 @@ fn meshes_branch_by_branch(gpu: &sylvan_gpu::Gpu, plant: &sylvan_plant::Plant) {
             height: size,
             technique: "hbt".into(),
             settings: q.settings(),
+            cpu_driven: q.cpu_driven(),
             cache: CachePolicy::Dir(dir.clone()),
             ..Default::default()
         };
@@ -582,6 +584,7 @@ fn a_plant_without_main_branches_opens_into_its_meshes_where_they_were_measured_
             height: size,
             technique: "hbt".into(),
             settings: q.settings(),
+            cpu_driven: q.cpu_driven(),
             cache: CachePolicy::Off,
             ..Default::default()
         };

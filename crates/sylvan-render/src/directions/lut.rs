@@ -169,14 +169,15 @@ impl DirectionLut {
     /// WGSL declarations of the three storage buffers [`DIRECTIONS_WGSL`](super::DIRECTIONS_WGSL) reads, at bindings
     /// `first_binding..first_binding + 3` of `group`: `dir_texels` ([`as_bytes`](Self::as_bytes)),
     /// `dir_faces` ([`DirectionSet::gpu_faces`]), `dir_samples` ([`DirectionSet::gpu_samples`]).
-    /// Put it before [`DIRECTIONS_WGSL`](super::DIRECTIONS_WGSL).
+    /// with the accessors it calls and `fn dir_lookup(d: vec3<f32>) -> DirLookup` over this one
+    /// table.
     pub fn bindings_wgsl(group: u32, first_binding: u32) -> String {
         let names = [
             ("dir_texels", "u32"),
             ("dir_faces", "u32"),
             ("dir_samples", "f32"),
         ];
-        let lines = names
+        let lines: String = names
             .iter()
             .zip(first_binding..)
             .map(|((name, scalar), binding)| {
@@ -184,8 +185,16 @@ impl DirectionLut {
                     "@group({group}) @binding({binding}) \
                  var<storage, read> {name}: array<vec4<{scalar}>>;\n"
                 )
-            });
-        lines.collect()
+            })
+            .collect();
+        lines
+            + "fn dir_texel(row: u32) -> vec4<u32> { return dir_texels[row]; }\n\
+               fn dir_face(row: u32) -> vec4<u32> { return dir_faces[row]; }\n\
+               fn dir_sample(row: u32) -> vec4<f32> { return dir_samples[row]; }\n\
+               fn dir_lookup(d: vec3<f32>) -> DirLookup {\n\
+               \x20   let r = u32(round(sqrt(f32(arrayLength(&dir_texels)))));\n\
+               \x20   return dir_lookup_in(d, DirTable(0u, r, 0u, 0u));\n\
+               }\n"
     }
 }
 

@@ -1,12 +1,15 @@
 //! [`DIRECTIONS_WGSL`]: the table lookup of [`super::DirectionLut::lookup`] and the pair
 //! weights of [`super::pair_weights`] for shaders, and its naga validation.
 
-/// WGSL of [`DirectionLut::lookup`](super::DirectionLut::lookup): `fn dir_lookup(d: vec3<f32>) -> DirLookup` returns the 3
-/// sample indices and weights for direction `d` (any length). Put
-/// [`DirectionLut::bindings_wgsl`](super::DirectionLut::bindings_wgsl) (or equivalent declarations of `dir_texels`, `dir_faces`,
-/// `dir_samples`) before it; the table's resolution comes from `arrayLength(&dir_texels)`.
-/// Zero, NaN and infinite `d` give cell 0 with weights (1, 0, 0) where the driver keeps NaN
-/// comparisons IEEE. One shader can hold one table (names are fixed).
+/// WGSL of [`DirectionLut::lookup`](super::DirectionLut::lookup): `fn dir_lookup_in(d: vec3<f32>, t: DirTable) -> DirLookup`
+/// returns the 3 sample indices and weights for direction `d` (any length) in table `t`, whose
+/// texels, faces and samples start at rows `t.texels`, `t.faces`, `t.samples` of storage the
+/// includer reads through `fn dir_texel(row: u32) -> vec4<u32>`, `fn dir_face(row: u32) ->
+/// vec4<u32>` and `fn dir_sample(row: u32) -> vec4<f32>` (so one shader may hold several
+/// tables, e.g. in one buffer of rows). [`DirectionLut::bindings_wgsl`](super::DirectionLut::bindings_wgsl)
+/// declares one table in three buffers with those accessors and `fn dir_lookup(d)`. Zero, NaN
+/// and infinite `d` give the table's cell 0 with weights (1, 0, 0) where the driver keeps NaN
+/// comparisons IEEE.
 pub const DIRECTIONS_WGSL: &str = r#"
 // MNP01 §4.1 direction table lookup (sylvan_render::directions).
 const DIR_NO_FACE: u32 = 0xffffu;
@@ -18,6 +21,14 @@ struct DirLookup {
     weights: vec3<f32>,
 }
 
+// A table's first texel, face and sample rows and its texels per side.
+struct DirTable {
+    texels: u32,
+    resolution: u32,
+    faces: u32,
+    samples: u32,
+}
+
 fn dir_octahedral_uv(d: vec3<f32>) -> vec2<f32> {
     let p = d / (abs(d.x) + abs(d.y) + abs(d.z));
     if p.z >= 0.0 {
@@ -27,10 +38,10 @@ fn dir_octahedral_uv(d: vec3<f32>) -> vec2<f32> {
     return (vec2<f32>(1.0) - abs(p.yx)) * s;
 }
 
-fn dir_cell_weights(d: vec3<f32>, face: vec3<u32>) -> vec3<f32> {
-    let a = dir_samples[face.x].xyz;
-    let b = dir_samples[face.y].xyz;
-    let c = dir_samples[face.z].xyz;
+fn dir_cell_weights(d: vec3<f32>, face: vec3<u32>, t: DirTable) -> vec3<f32> {
+    let a = dir_sample(t.samples + face.x).xyz;
+    let b = dir_sample(t.samples + face.y).xyz;
+    let c = dir_sample(t.samples + face.z).xyz;
     let w = vec3<f32>(dot(d, cross(b, c)), dot(d, cross(c, a)), dot(d, cross(a, b)));
     let sum = w.x + w.y + w.z;
     if sum > 0.0 {
@@ -39,25 +50,25 @@ fn dir_cell_weights(d: vec3<f32>, face: vec3<u32>) -> vec3<f32> {
     return vec3<f32>(DIR_NO_SCORE);
 }
 
-fn dir_lookup(d_in: vec3<f32>) -> DirLookup {
-    var out = DirLookup(dir_faces[0].xyz, vec3<f32>(1.0, 0.0, 0.0));
+fn dir_lookup_in(d_in: vec3<f32>, table: DirTable) -> DirLookup {
+    var out = DirLookup(dir_face(table.faces).xyz, vec3<f32>(1.0, 0.0, 0.0));
     let m = max(max(abs(d_in.x), abs(d_in.y)), abs(d_in.z));
     if !(m > 0.0 && m <= DIR_MAX_COMPONENT) {
         return out;
     }
     let d = normalize(d_in / m);
-    let r = u32(round(sqrt(f32(arrayLength(&dir_texels)))));
+    let r = table.resolution;
     let t = floor((dir_octahedral_uv(d) * 0.5 + 0.5) * f32(r));
     let texel_xy = vec2<u32>(clamp(t, vec2<f32>(0.0), vec2<f32>(f32(r - 1u))));
-    let texel = dir_texels[texel_xy.y * r + texel_xy.x];
+    let texel = dir_texel(table.texels + texel_xy.y * r + texel_xy.x);
     var best = DIR_NO_SCORE;
     for (var k = 0u; k < 8u; k++) {
         let id = (texel[k >> 1u] >> ((k & 1u) * 16u)) & 0xffffu;
         if id == DIR_NO_FACE {
             break;
         }
-        let face = dir_faces[id].xyz;
-        let w = dir_cell_weights(d, face);
+        let face = dir_face(table.faces + id).xyz;
+        let w = dir_cell_weights(d, face, table);
         let score = min(w.x, min(w.y, w.z));
         if score > best {
             best = score;

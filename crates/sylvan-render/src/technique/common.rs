@@ -6,6 +6,8 @@
 use crate::RenderError;
 use crate::frame::FrameResources;
 use crate::pipeline::{self, PassKind, PipelineSpec};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU8, Ordering};
 use sylvan_gpu::Gpu;
 
 /// Hermite smoothstep of `t` clamped to [0, 1]: 0 at 0, 1 at 1, zero slope at both ends.
@@ -375,4 +377,96 @@ pub(crate) fn mixed_lists(
         staging.extend(sort.iter().map(|x| x.1));
         *range = start..staging.len() as u32;
     }
+}
+
+/// A buffer read back a frame or more late: copy → map after the frame's submission → read.
+pub(crate) struct LateReadback {
+    pub(crate) buffer: wgpu::Buffer,
+    bytes: u64,
+    /// 0 idle, 1 copied (not yet mapped), 2 map pending, 3 mapped, 4 map failed.
+    state: Arc<AtomicU8>,
+}
+
+impl LateReadback {
+    pub(crate) fn new(gpu: &Gpu, bytes: u64) -> Self {
+        Self {
+            buffer: gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("late_readback"),
+                size: bytes.next_multiple_of(256),
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            bytes,
+            state: Arc::new(AtomicU8::new(0)),
+        }
+    }
+
+    /// Records the copy when the buffer is free.
+    pub(crate) fn copy(&self, encoder: &mut wgpu::CommandEncoder, src: &wgpu::Buffer) {
+        if self.state.load(Ordering::Acquire) == 0 {
+            encoder.copy_buffer_to_buffer(src, 0, &self.buffer, 0, self.bytes);
+            self.state.store(1, Ordering::Release);
+        }
+    }
+
+    /// Advances without waiting (the copy's frame has been submitted); the words once mapped.
+    pub(crate) fn poll(&self) -> Option<Vec<u32>> {
+        match self.state.load(Ordering::Acquire) {
+            1 => {
+                self.state.store(2, Ordering::Release);
+                let state = self.state.clone();
+                self.buffer
+                    .slice(..self.bytes)
+                    .map_async(wgpu::MapMode::Read, move |r| {
+                        state.store(if r.is_ok() { 3 } else { 4 }, Ordering::Release);
+                    });
+                None
+            }
+            3 => {
+                let words = self
+                    .buffer
+                    .slice(..self.bytes)
+                    .get_mapped_range()
+                    .ok()
+                    .map(|d| bytemuck::cast_slice::<u8, u32>(&d).to_vec());
+                self.buffer.unmap();
+                self.state.store(0, Ordering::Release);
+                words
+            }
+            4 => {
+                self.state.store(0, Ordering::Release);
+                None
+            }
+            _ => None,
+        }
+    }
+
+    /// Waits for the copied words (after the frame's submission has completed).
+    pub(crate) fn finish(&self, gpu: &Gpu) -> Result<Option<Vec<u32>>, RenderError> {
+        for _ in 0..3 {
+            if let Some(words) = self.poll() {
+                return Ok(Some(words));
+            }
+            if self.state.load(Ordering::Acquire) == 0 {
+                return Ok(None);
+            }
+            gpu.wait()?;
+        }
+        Ok(None)
+    }
+}
+
+/// A storage buffer of at least `bytes` (256-byte multiple) with `extra` usages.
+pub(crate) fn storage(
+    gpu: &Gpu,
+    label: &str,
+    extra: wgpu::BufferUsages,
+    bytes: u64,
+) -> wgpu::Buffer {
+    gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: bytes.max(256).next_multiple_of(256),
+        usage: wgpu::BufferUsages::STORAGE | extra,
+        mapped_at_creation: false,
+    })
 }

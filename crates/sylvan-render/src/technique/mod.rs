@@ -18,9 +18,9 @@
 //! | `zfield` | [`zfield`] | BN12 §5, §8: z-fields, sun/sky lighting, per-tree coverage masks |
 //! | `auto` | [`lod`] | the LOD chain: a technique per distance band, cross-faded |
 //!
-//! GPU-driven techniques (`Entry::gpu_driven`: all but `hbt`, and a chain of those)
-//! draw the tiled world from [`DrawContext::culled`] ([`crate::world`]); the others get every
-//! tree on the CPU in [`FrameInput::instances`].
+//! GPU-driven techniques (`Entry::gpu_driven`: every per-tree technique, and the chain) draw
+//! the tiled world from [`DrawContext::culled`] ([`crate::world`]); with `--cpu-driven` they
+//! get every tree on the CPU in [`FrameInput::instances`].
 //!
 //! Adding a technique: docs/DESIGN.md, "Adding a technique".
 

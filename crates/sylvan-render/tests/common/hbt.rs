@@ -62,6 +62,7 @@ pub struct HbtParams {
     pub measured_switch: bool,
     pub band: f32,
     pub shadows: hbt::HbtShadows,
+    pub scene_visibility: bool,
     pub min_weight: f32,
     pub projection: hbt::HbtProjection,
     pub fixed_light: Option<[f32; 3]>,
@@ -89,6 +90,7 @@ impl Default for HbtParams {
             measured_switch: d.measured_switch,
             band: d.band,
             shadows: d.shadows,
+            scene_visibility: d.scene_visibility,
             min_weight: d.min_weight,
             projection: d.projection,
             fixed_light: d.fixed_light,
@@ -124,10 +126,21 @@ impl HbtParams {
             measured_switch: self.measured_switch,
             band: self.band,
             shadows: self.shadows,
+            scene_visibility: self.scene_visibility,
             min_weight: self.min_weight,
             projection: self.projection,
             fixed_light: self.fixed_light,
         }
+    }
+
+    /// Whether these options need the CPU-driven frame (the GPU-driven one opens trees as a
+    /// whole, facing, with cascaded sun shadows and no scene-level cube-maps).
+    pub fn cpu_driven(&self) -> bool {
+        self.mesh_per_branch
+            || self.small_branches
+            || self.scene_visibility
+            || self.projection != hbt::HbtProjection::Facing
+            || self.shadows != hbt::HbtShadows::Cascades
     }
 
     pub fn settings(&self) -> Vec<sylvan_scene::Setting> {
@@ -164,6 +177,7 @@ pub fn render(
         spp,
         technique: technique.into(),
         settings: hbt.settings(),
+        cpu_driven: hbt.cpu_driven(),
         cache: CachePolicy::Off,
         ..Default::default()
     };
@@ -186,6 +200,7 @@ pub fn render_with(
         spp,
         technique: technique.into(),
         settings: hbt.settings(),
+        cpu_driven: hbt.cpu_driven(),
         cache: CachePolicy::Off,
         ..Default::default()
     };

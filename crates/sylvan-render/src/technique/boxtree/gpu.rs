@@ -14,10 +14,9 @@ use super::draw::GpuImpostor;
 use crate::RenderError;
 use crate::frame::CASCADES;
 use crate::technique::FrameInput;
+use crate::technique::common::{LateReadback, storage};
 use crate::world::Culled;
 use bytemuck::{Pod, Zeroable};
-use std::sync::Arc;
-use std::sync::atomic::{AtomicU8, Ordering};
 use sylvan_gpu::{Gpu, layout};
 use wgpu::util::DeviceExt;
 
@@ -63,83 +62,6 @@ struct Counts {
     residual: Vec<u32>,
 }
 
-/// A buffer read back a frame or more late: copy → map after the frame's submission → read.
-struct LateReadback {
-    buffer: wgpu::Buffer,
-    bytes: u64,
-    /// 0 idle, 1 copied (not yet mapped), 2 map pending, 3 mapped, 4 map failed.
-    state: Arc<AtomicU8>,
-}
-
-impl LateReadback {
-    fn new(gpu: &Gpu, bytes: u64) -> Self {
-        Self {
-            buffer: gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("boxtree_readback"),
-                size: bytes.next_multiple_of(256),
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            }),
-            bytes,
-            state: Arc::new(AtomicU8::new(0)),
-        }
-    }
-
-    /// Records the copy when the buffer is free.
-    fn copy(&self, encoder: &mut wgpu::CommandEncoder, src: &wgpu::Buffer) {
-        if self.state.load(Ordering::Acquire) == 0 {
-            encoder.copy_buffer_to_buffer(src, 0, &self.buffer, 0, self.bytes);
-            self.state.store(1, Ordering::Release);
-        }
-    }
-
-    /// Advances without waiting (the copy's frame has been submitted); the words once mapped.
-    fn poll(&self) -> Option<Vec<u32>> {
-        match self.state.load(Ordering::Acquire) {
-            1 => {
-                self.state.store(2, Ordering::Release);
-                let state = self.state.clone();
-                self.buffer
-                    .slice(..self.bytes)
-                    .map_async(wgpu::MapMode::Read, move |r| {
-                        state.store(if r.is_ok() { 3 } else { 4 }, Ordering::Release);
-                    });
-                None
-            }
-            3 => {
-                let words = self
-                    .buffer
-                    .slice(..self.bytes)
-                    .get_mapped_range()
-                    .ok()
-                    .map(|d| bytemuck::cast_slice::<u8, u32>(&d).to_vec());
-                self.buffer.unmap();
-                self.state.store(0, Ordering::Release);
-                words
-            }
-            4 => {
-                self.state.store(0, Ordering::Release);
-                None
-            }
-            _ => None,
-        }
-    }
-
-    /// Waits for the copied words (after the frame's submission has completed).
-    fn finish(&self, gpu: &Gpu) -> Result<Option<Vec<u32>>, RenderError> {
-        for _ in 0..3 {
-            if let Some(words) = self.poll() {
-                return Ok(Some(words));
-            }
-            if self.state.load(Ordering::Acquire) == 0 {
-                return Ok(None);
-            }
-            gpu.wait()?;
-        }
-        Ok(None)
-    }
-}
-
 /// The traversal's pipelines and buffers.
 pub(super) struct GpuTraversal {
     layout: wgpu::BindGroupLayout,
@@ -174,15 +96,6 @@ pub(super) struct GpuTraversal {
     pub reallocations: u32,
     /// Records that did not fit in the last frame read back.
     pub dropped: u64,
-}
-
-fn storage(gpu: &Gpu, label: &str, extra: wgpu::BufferUsages, bytes: u64) -> wgpu::Buffer {
-    gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(label),
-        size: bytes.max(256).next_multiple_of(256),
-        usage: wgpu::BufferUsages::STORAGE | extra,
-        mapped_at_creation: false,
-    })
 }
 
 /// A list of `records`: its parked records (`parked` bytes each) and its output (`out` bytes

@@ -2,9 +2,13 @@
 //! look-ups and reconstruction weights (MNP01 §4.1) and visibility into sorted instance lists
 //! ([`Hbt::update`]), and the passes ([`Hbt::record`]: the meshes, then the billboards). The
 //! parts: [`prepare`] (building [`Hbt`]), [`gpu`] (the shader's records, the atlas and the
-//! pipelines), [`select`] (the GPU-free level selection).
+//! pipelines), [`select`] (the GPU-free level selection), [`gpu_frame`] (the GPU-driven frame:
+//! the same selection and look-ups in compute passes over the world's culled lists, the
+//! default; the CPU loop above serves `--cpu-driven`).
 
 mod gpu;
+mod gpu_frame;
+pub(crate) use gpu_frame::select_source;
 mod prepare;
 mod select;
 
@@ -75,6 +79,8 @@ pub struct Hbt {
     mesh_draws: [Vec<MeshDraw>; PASSES],
     /// Per placement of the tree at hand, its share drawn as meshes.
     part_mesh: Vec<f32>,
+    /// The GPU-driven frame (made at the first frame fed by the world's cull).
+    gpu_frame: Option<gpu_frame::HbtGpuFrame>,
     opened: u32,
     meshed: u32,
     branches_opened: u32,
@@ -147,9 +153,33 @@ impl Technique for Hbt {
     fn prepare_frame(
         &mut self,
         gpu: &Gpu,
-        _: &mut wgpu::CommandEncoder,
+        encoder: &mut wgpu::CommandEncoder,
         input: &FrameInput<'_>,
     ) -> Result<(), RenderError> {
+        if let Some(culled) = input.culled.first() {
+            if self.gpu_frame.is_none() {
+                let small = self.plants.iter().any(|p| !p.small.is_empty());
+                if let Some(option) = gpu_frame::supports(&self.draw, small) {
+                    return Err(RenderError::Option(format!(
+                        "{option}: hbt's GPU-driven frame opens a tree as a whole, facing the eye, with sun shadows from the cascades — pass --cpu-driven to draw it on the CPU"
+                    )));
+                }
+                self.gpu_frame = Some(gpu_frame::HbtGpuFrame::new(
+                    gpu,
+                    &self.plants,
+                    &self.species_plant,
+                    [
+                        &self.views,
+                        &self.lights,
+                        &self.branch_views,
+                        &self.branch_lights,
+                    ],
+                    &self.draw,
+                )?);
+            }
+            let frame = self.gpu_frame.as_mut().expect("made above");
+            return frame.record(gpu, encoder, culled, input, &self.draw);
+        }
         self.staging.clear();
         self.mesh_staging.clear();
         self.opened = 0;
@@ -440,6 +470,22 @@ impl Technique for Hbt {
     /// `visibility_bytes` (CPU bytes of the cube-maps), `visibility_ms` (building the scene's),
     /// and this frame's `trees_opened`, `trees_meshed`, `branches_opened`, `branches_meshed`.
     fn stats(&self) -> Vec<(&'static str, f64)> {
+        if let Some(f) = &self.gpu_frame {
+            // The GPU-driven frame's counts, read back after the frame (or a frame late).
+            let (opened, meshed) = f.opened_meshed();
+            return vec![
+                ("visibility_bytes", self.visibility_bytes() as f64),
+                ("trees_opened", opened as f64),
+                ("trees_meshed", meshed as f64),
+                // Neither opens on the GPU-driven frame (no small branches, no per-branch
+                // meshes).
+                ("branches_opened", 0.0),
+                ("branches_meshed", 0.0),
+                ("billboards", f.billboards(0) as f64),
+                ("records_dropped", f.dropped as f64),
+                ("list_growths", f.reallocations as f64),
+            ];
+        }
         vec![
             ("visibility_bytes", self.visibility_bytes() as f64),
             ("visibility_ms", self.visibility_build_ms()),
@@ -451,11 +497,48 @@ impl Technique for Hbt {
     }
 
     fn bytes(&self) -> u64 {
-        self.static_bytes + self.instances.buffer.size() + self.mesh_instances.buffer.size()
+        self.static_bytes
+            + self.instances.buffer.size()
+            + self.mesh_instances.buffer.size()
+            + self
+                .gpu_frame
+                .as_ref()
+                .map_or(0, gpu_frame::HbtGpuFrame::bytes)
     }
 
     fn reallocations(&self) -> u32 {
-        self.instances.reallocations
+        self.instances.reallocations + self.gpu_frame.as_ref().map_or(0, |f| f.reallocations)
+    }
+
+    /// One draw per species drawing nothing: the selection reads each list's count from
+    /// these arguments.
+    fn indirect_draws(&self) -> Vec<crate::world::IndirectDraw> {
+        (0..self.species_plant.len() as u32)
+            .map(|s| crate::world::IndirectDraw::vertices(s, 0))
+            .collect()
+    }
+
+    fn finish_frame(&mut self, gpu: &Gpu) -> Result<bool, RenderError> {
+        match &mut self.gpu_frame {
+            Some(f) => f.finish(gpu),
+            None => Ok(false),
+        }
+    }
+
+    fn own_triangles(&self, pass: usize) -> u64 {
+        let Some(f) = &self.gpu_frame else { return 0 };
+        let mut tris = f.billboards(pass) as u64 * 2;
+        for (s, &pi) in self.species_plant.iter().enumerate() {
+            let Some(m) = &self.plants[pi].meshes else {
+                continue;
+            };
+            let per_tree = [&m.wood, &m.leaves]
+                .iter()
+                .map(|g| g.as_ref().map_or(0, |g| g.index_count as u64 / 3))
+                .sum::<u64>();
+            tris += f.meshes(pass, s) as u64 * per_tree;
+        }
+        tris
     }
 }
 
@@ -466,6 +549,9 @@ impl Hbt {
         ctx: &DrawContext<'_>,
         shadow: bool,
     ) -> DrawCounts {
+        if let (Some(_), Some(f)) = (ctx.culled.first(), &self.gpu_frame) {
+            return self.record_indirect(pass, ctx, f, shadow);
+        }
         pass.set_bind_group(0, ctx.frame_bind, &[]);
         // Opaque first: the trees drawn as meshes, then the billboards over them.
         let mut counts = DrawCounts::default();
@@ -521,6 +607,53 @@ impl Hbt {
             draw_calls: 1,
             triangles: n * quads as u64 * 2,
         };
+        counts
+    }
+
+    /// The GPU-driven pass: the trees drawn as meshes, then the billboards, from the
+    /// selection's lists, every draw indirect (the counts are the last frame's read back).
+    fn record_indirect(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        ctx: &DrawContext<'_>,
+        f: &gpu_frame::HbtGpuFrame,
+        shadow: bool,
+    ) -> DrawCounts {
+        let mut counts = DrawCounts::default();
+        let p = ctx.pass;
+        pass.set_bind_group(0, ctx.frame_bind, &[]);
+        if let Some(pipes) = &self.mesh_pipes {
+            let (wood, leaf) = pipes.for_pass(shadow);
+            for (pipeline, leaves) in [(wood, false), (leaf, true)] {
+                pass.set_pipeline(pipeline);
+                for (s, &pi) in self.species_plant.iter().enumerate() {
+                    let Some(meshes) = &self.plants[pi].meshes else {
+                        continue;
+                    };
+                    let Some(mesh) = (if leaves { &meshes.leaves } else { &meshes.wood }) else {
+                        continue;
+                    };
+                    pass.set_bind_group(1, &meshes.material, &[]);
+                    pass.set_vertex_buffer(0, mesh.vertices.slice(..));
+                    pass.set_vertex_buffer(1, f.out_mesh.slice(..));
+                    pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
+                    let (args, offset) = f.mesh_args(p, s, leaves);
+                    pass.draw_indexed_indirect(args, offset);
+                    counts.draw_calls += 1;
+                }
+            }
+        }
+        pass.set_pipeline(if shadow {
+            &self.shadow_pipeline
+        } else {
+            &self.pipeline
+        });
+        pass.set_bind_group(1, &self.bind, &[]);
+        pass.set_vertex_buffer(1, f.out_bb.slice(..));
+        let (args, offset) = f.billboard_args(p);
+        pass.draw_indirect(args, offset);
+        counts.draw_calls += 1;
+        counts.triangles = self.own_triangles(p);
         counts
     }
 }

@@ -131,6 +131,17 @@
 //!   sum (which facing projection gets exactly).
 //! - Leaf transmission is applied to wood too (the baker does not tell them apart), as in
 //!   `boxtree`.
+//! - **No scene-level cube-maps by default** ([`HbtDrawParams::scene_visibility`]): MNP01
+//!   §3.3's top level — every placed tree's cube-maps against the other trees and the terrain —
+//!   is built for every tree before the first frame (O(world): 6.6 s for the 7,665 trees of
+//!   `assets/scenes/example.toml`, 362 s for 100k) and, measured, takes `hbt` further from the
+//!   reference, whose sky term has no occlusion between trees (ꟻLIP 0.0728 with, 0.0711
+//!   without at 640×360). It stays available with `--cpu-driven`; the branch level's baked
+//!   cube-maps are kept.
+//! - **GPU-driven** by default (`draw/gpu_frame.rs`, `draw/select.wgsl`): §4's selection and
+//!   §4.1's look-ups run in compute passes over the world's culled lists, and everything is
+//!   drawn indirect; the per-branch meshes, small branches, cross projection and cube-map sun
+//!   are CPU-driven only (`--cpu-driven`; refused in one line otherwise).
 //!
 //! Cost: bake = V + L rasterisations plus a CPU lighting pass of V·L·(tile·ss)² samples per
 //! object, plus the branch cube-maps (and, for a plant without main branches, the measured mesh
@@ -442,6 +453,11 @@ pub struct HbtDrawParams {
     pub band: f32,
     /// Received sun shadows from cube-maps or cascades.
     pub shadows: HbtShadows,
+    /// MNP01 §3.3's top level: every placed tree's visibility cube-maps against the other
+    /// trees and the terrain (their sky term; with [`HbtShadows::CubeMaps`] also the sun, and
+    /// then always built). CPU-driven frames only: built for every placed tree before the first
+    /// frame, they grow with the world.
+    pub scene_visibility: bool,
     /// Pair weights below this are dropped and the rest renormalised (MNP01 §4.1).
     pub min_weight: f32,
     /// Facing or cross projection.
@@ -474,6 +490,11 @@ impl Default for HbtDrawParams {
             // Measured: MNP01's 8-corner interpolation under-darkens a tree in another's shadow
             // (0.080 vs the reference's 0.289 on the test grove; cascades 0.301), see BENCHMARKS.md.
             shadows: HbtShadows::Cascades,
+            // Measured (640×360, ꟻLIP vs 16-spp geometry): without them `hbt` is closer to the
+            // reference, whose sky term has no occlusion between trees — 0.0711 against 0.0728
+            // on assets/scenes/example.toml, 0.0934 against 0.0936 on eval/broadleaf.toml — and
+            // starts 6.6 s sooner on the former (BENCHMARKS.md, "hbt GPU-driven").
+            scene_visibility: false,
             min_weight: 0.05,
             projection: HbtProjection::Facing,
             fixed_light: None,
@@ -527,6 +548,11 @@ impl ParamTable for HbtDrawParams {
             key: "projection",
             unit: "",
             doc: "blended images on one \"facing\" quad or on \"cross\" planes (MNP01 fig. 3.2)",
+        },
+        ParamDoc {
+            key: "scene_visibility",
+            unit: "",
+            doc: "MNP01 §3.3's scene-level cube-maps of every placed tree (sky term; always with shadows=cubemaps); CPU-driven only (--cpu-driven)",
         },
         ParamDoc {
             key: "fixed_light",

@@ -225,7 +225,7 @@ fn pack_unorm(v: [f32; 4]) -> u32 {
     })
 }
 
-fn pack8(v: [f32; 8]) -> [u32; 2] {
+pub(super) fn pack8(v: [f32; 8]) -> [u32; 2] {
     [
         pack_unorm([v[0], v[1], v[2], v[3]]),
         pack_unorm([v[4], v[5], v[6], v[7]]),

@@ -374,6 +374,7 @@ impl Hbt {
             mesh_sort: Vec::new(),
             mesh_draws: std::array::from_fn(|_| Vec::new()),
             part_mesh: Vec::new(),
+            gpu_frame: None,
             opened: 0,
             meshed: 0,
             branches_opened: 0,
