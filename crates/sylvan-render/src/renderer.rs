@@ -1218,6 +1218,21 @@ impl Renderer {
         self.options.debug = debug;
     }
 
+    /// Turns the world's pop audit on or off ([`crate::world::PopCounts`], in the `world`
+    /// statistics as `pops_*`): GPU-driven frames only.
+    pub fn set_pop_audit(&mut self, gpu: &Gpu, on: bool) -> Result<(), RenderError> {
+        match &mut self.world {
+            Some(w) => {
+                w.set_pop_audit(gpu, on);
+                Ok(())
+            }
+            None if !on => Ok(()),
+            None => Err(RenderError::Option(
+                "--count-pops: the pop audit is part of the GPU-driven frame, and this one is CPU-driven — drop --cpu-driven".into(),
+            )),
+        }
+    }
+
     /// Cascaded shadows on or off from the next frame on (the shadow maps stay allocated).
     pub fn set_shadows(&mut self, shadows: bool) {
         self.options.shadows = shadows;

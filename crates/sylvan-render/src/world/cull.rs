@@ -183,6 +183,8 @@ pub(crate) struct FrameCull<'a> {
     pub draws: &'a [IndirectDraw],
     /// The previous frame's depth pyramid for the camera pass's occlusion test.
     pub pyramid: &'a super::hiz::PyramidUse<'a>,
+    /// The pop audit's per-slot presence buffer, and whether it is on (else a placeholder).
+    pub audit: (&'a wgpu::Buffer, bool),
 }
 
 /// The last frame's lists, as the techniques draw them.
@@ -265,7 +267,7 @@ pub(crate) struct Cull {
     draws_per_pass: usize,
     max_binding: u64,
     /// The bind group of the buffers above, with the pool and pyramid generations it binds.
-    bind: Option<(wgpu::BindGroup, (u64, u64))>,
+    bind: Option<(wgpu::BindGroup, (u64, u64), wgpu::Buffer)>,
     /// Trees the camera pass's occlusion test dropped in the frame last read back.
     occluded: u32,
 }
@@ -313,7 +315,7 @@ impl Cull {
         list_layout: ListLayout,
         max_binding: u64,
     ) -> Result<Self, RenderError> {
-        let need = 9; // and the depth pyramid's two sampled textures
+        let need = 10; // and the depth pyramid's two sampled textures
         let have = gpu.device.limits().max_storage_buffers_per_shader_stage;
         if have < need {
             return Err(RenderError::Option(format!(
@@ -349,6 +351,7 @@ impl Cull {
                 rw(8),
                 pyramid(9),
                 pyramid(10),
+                rw(11),
             ],
         });
         let module = sylvan_gpu::shader(gpu, "cull", include_str!("cull.wgsl"));
@@ -421,6 +424,12 @@ impl Cull {
             bind: None,
             occluded: 0,
         })
+    }
+
+    /// Each species' bounding sphere in plant units (xyz centre, w radius), as the shader has
+    /// them.
+    pub fn species_spheres(&self) -> [[f32; 4]; MAX_SPECIES] {
+        self.species_spheres
     }
 
     /// GPU bytes.
@@ -505,7 +514,10 @@ impl Cull {
             .collect();
         // The bind group is made again only when a buffer it binds was replaced.
         let generations = (f.pool_generation, f.pyramid.generation);
-        let mut stale = self.bind.as_ref().is_none_or(|b| b.1 != generations);
+        let mut stale = self
+            .bind
+            .as_ref()
+            .is_none_or(|b| b.1 != generations || &b.2 != f.audit.0);
         stale |= self.trees.reserve(gpu, at as u64 * TREE_BYTES);
         stale |= self.runs.reserve(gpu, std::mem::size_of_val(f.runs) as u64);
         stale |= self
@@ -524,7 +536,7 @@ impl Cull {
                 draws.len() as u32,
                 self.layout_of_lists.per_species as u32,
             ],
-            fade: [f.fade_start, 0.0, 0.0, 0.0],
+            fade: [f.fade_start, f.audit.1 as u32 as f32, 0.0, 0.0],
             sort: [
                 sorted as u32 as f32,
                 SORT_NEAR_M,
@@ -573,9 +585,10 @@ impl Cull {
                     self.parked.buffer.as_entire_binding(),
                     wgpu::BindingResource::TextureView(f.pyramid.views[0]),
                     wgpu::BindingResource::TextureView(f.pyramid.views[1]),
+                    f.audit.0.as_entire_binding(),
                 ],
             );
-            self.bind = Some((bind, generations));
+            self.bind = Some((bind, generations, f.audit.0.clone()));
         }
         let bind = &self.bind.as_ref().expect("made above").0;
         encoder.clear_buffer(&self.counters.buffer, 0, None);

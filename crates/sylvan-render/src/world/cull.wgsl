@@ -49,7 +49,7 @@ struct Params {
     // x groups per pass, y runs, z draws, w 1 when groups are species (else one mixed group)
     info: vec4<u32>,
     // x: camera-pass presence falls from 1 at this distance to 0 at eye_far.w (the world's
-    // tree distance); infinite for a world drawn whole
+    // tree distance); infinite for a world drawn whole. y 1: the pop audit is on (`audit`)
     fade: vec4<f32>,
     // x 1: the camera list is sorted back to front; y nearest bucketed distance;
     // z buckets per log2 of distance; w sorted list capacity
@@ -89,6 +89,9 @@ const BUCKETS: u32 = 4096u;
 // even levels in the first texture, odd in the second, side by side (world/hiz.wgsl).
 @group(0) @binding(9) var hiz_even: texture_2d<f32>;
 @group(0) @binding(10) var hiz_odd: texture_2d<f32>;
+// The pop audit (world/pops.rs): per pool slot, the camera presence drawn this frame (1/65536,
+// summed over the requests' culls); a placeholder while it is off.
+@group(0) @binding(11) var<storage, read_write> audit: array<atomic<u32>>;
 
 fn hiz_load(level: u32, t: vec2<i32>) -> f32 {
     let at = t + vec2<i32>(i32(params.hiz_offsets[level / 4u][level % 4u]), 0);
@@ -258,6 +261,10 @@ fn cull(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) l
         }
         if (!inside(p, c, r)) {
             continue;
+        }
+        if (p == 0u && params.fade.y > 0.5) {
+            // Before the occlusion test: a hidden tree is not a vanished one.
+            atomicAdd(&audit[page.first + i], u32(presence * 65536.0 + 0.5));
         }
         if (p == 0u && occluded(c, r)) {
             atomicAdd(&counters[list_count() + 2u * BUCKETS], 1u);

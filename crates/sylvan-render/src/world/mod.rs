@@ -25,8 +25,10 @@
 //!   (`trees_dropped`).
 
 pub mod cover;
+pub use pops::PopCounts;
 mod cull;
 mod hiz;
+mod pops;
 mod produce;
 mod seed;
 
@@ -161,6 +163,8 @@ pub struct WorldStats {
     pub trees_occluded: u32,
     /// Pool and list bytes on the GPU.
     pub gpu_bytes: u64,
+    /// With the pop audit on: what it counted (read back after the frame).
+    pub pops: Option<PopCounts>,
 }
 
 impl WorldStats {
@@ -191,6 +195,17 @@ impl WorldStats {
         }
         for (c, &n) in self.trees_drawn[1..].iter().enumerate() {
             m.insert(format!("trees_drawn_shadow{c}"), n as f64);
+        }
+        if let Some(p) = &self.pops {
+            for (k, v) in [
+                ("pops_appeared", p.appeared as f64),
+                ("pops_vanished", p.vanished as f64),
+                ("pops_jumped", p.jumped as f64),
+                ("pops_largest", p.largest as f64),
+                ("pops_step", p.step as f64),
+            ] {
+                m.insert(k.to_string(), v);
+            }
         }
         m
     }
@@ -235,6 +250,13 @@ pub struct World {
     runs_scratch: Vec<cull::GpuRun>,
     /// Counts the changes to `resident` (a tile inserted or evicted).
     generation: u64,
+    /// How far a tree's crown sphere may reach beyond its tile's square, horizontally
+    /// (metres): a tile that near the range may hold trees the cull draws.
+    overhang: f32,
+    /// With [`World::set_pop_audit`] on: the pop audit.
+    pops: Option<pops::PopAudit>,
+    /// What the culls bind without it.
+    no_audit: wgpu::Buffer,
 }
 
 /// The tiles within reach of any point of the eye's tile: made again only when the eye
@@ -261,7 +283,6 @@ struct Wanted {
 
 /// A resident tile in [`Wanted::snapshot`].
 struct SnapTile {
-    key: TileKey,
     min: Vec3,
     max: Vec3,
     count: u32,
@@ -310,7 +331,6 @@ impl Wanted {
                 });
             }
             self.snapshot.push(SnapTile {
-                key,
                 min: r.min,
                 max: r.max,
                 count: r.count,
@@ -333,6 +353,20 @@ impl World {
     ) -> Result<Self, RenderError> {
         let bounds = &source.bounds;
         let settings = scene.world;
+        // The crown sphere's horizontal reach from the trunk base per metre of plant height,
+        // for the tallest tree of the scene (the cull's spheres: box centre, half diagonal).
+        let tallest = scene.trees.iter().map(|t| t.height).fold(
+            scene.seeded.as_ref().map_or(0.0, |f| f.tallest_m()),
+            f32::max,
+        );
+        let overhang = bounds
+            .iter()
+            .map(|b| {
+                let c = (b.min + b.max) * 0.5;
+                (Vec2::new(c.x, c.z).length() + (b.max - b.min).length() * 0.5) / b.max.y.max(1e-3)
+            })
+            .fold(0.0f32, f32::max)
+            * tallest;
         let tile_m = settings.tile_m;
         let tiles = scene
             .terrain
@@ -402,6 +436,14 @@ impl World {
             cancel_due: false,
             runs_scratch: Vec::new(),
             generation: 0,
+            overhang,
+            pops: None,
+            no_audit: crate::technique::common::storage(
+                gpu,
+                "cull_no_audit",
+                wgpu::BufferUsages::empty(),
+                256,
+            ),
         })
     }
 
@@ -431,6 +473,23 @@ impl World {
         match &mut self.pyramid {
             Some(p) => p.reduce(gpu, encoder, depth, size, view_proj, eye),
             None => Ok(()),
+        }
+    }
+
+    /// Turns the pop audit on or off (off by default; see [`PopCounts`]): each frame counts
+    /// the trees inside the view that appeared, vanished or jumped in presence since the last
+    /// (in [`WorldStats::pops`], read back after the frame — a wait).
+    pub fn set_pop_audit(&mut self, gpu: &Gpu, on: bool) {
+        match (on, &self.pops) {
+            (true, None) => {
+                let spheres = self
+                    .culls
+                    .first()
+                    .map_or([[0.0; 4]; cull::MAX_SPECIES], cull::Cull::species_spheres);
+                self.pops = Some(pops::PopAudit::new(gpu, self.pool_pages * PAGE, spheres));
+            }
+            (false, Some(_)) => self.pops = None,
+            _ => {}
         }
     }
 
@@ -477,7 +536,8 @@ impl World {
         // Tiles the GPU can seed are planned here instead (nearest first). Only while a
         // wanted tile may be missing: once all are resident a frame asks for nothing.
         let t = self.settings.tile_m;
-        let reach = range + self.settings.prefetch_m;
+        // (Tiles whose trees' crowns may reach into range are within range + overhang.)
+        let reach = range + self.settings.prefetch_m.max(self.overhang);
         let eye_tile = TileKey::of(eye.x, eye.y, t);
         let mut wanted = match self.wanted.take() {
             Some(w) if w.eye_tile == eye_tile && w.reach == reach => w,
@@ -526,7 +586,7 @@ impl World {
         let visible: std::collections::HashSet<TileKey> = match self.asking {
             true => (wanted.tiles.iter())
                 .filter(|&&k| {
-                    k.distance(eye, t) <= range
+                    k.distance(eye, t) <= range + self.overhang
                         && !self.resident.contains_key(&k)
                         && self.tile_may_be_seen(k, view)
                 })
@@ -578,7 +638,7 @@ impl World {
         // (Planned only when dispatched: the ring beyond this frame's share costs nothing.)
         let (seen, ring): (Vec<_>, Vec<_>) = gpu_tiles
             .into_iter()
-            .partition(|&(d, k)| d <= range && self.tile_may_be_seen(k, view));
+            .partition(|&(d, k)| d <= range + self.overhang && self.tile_may_be_seen(k, view));
         let plan = |tiles: &mut dyn Iterator<Item = (f32, TileKey)>, seeds: &seed::GpuSeeds| {
             tiles.map(|(_, k)| seeds.plan(k)).collect::<Vec<_>>()
         };
@@ -612,7 +672,9 @@ impl World {
         wanted.snap(&self.resident, self.generation);
         let mut seen: Vec<(&SnapTile, u32, f32, f32)> = Vec::new();
         for r in &wanted.snapshot {
-            if r.key.distance(eye, t) > range {
+            // The tile's trees' spheres against the range, as the cull tests each tree (its
+            // square's distance would drop trees whose crowns reach into range).
+            if box_distance(view.eye, r.min, r.max) >= range {
                 continue;
             }
             let mut mask = 0u32;
@@ -642,6 +704,13 @@ impl World {
         let pyramid = match &self.pyramid {
             Some(p) => p.for_frame(view.eye),
             None => hiz::PyramidUse::none([&self.no_pyramid[0], &self.no_pyramid[1]]),
+        };
+        if let Some(p) = &mut self.pops {
+            p.resize(gpu, encoder, self.pool_pages * PAGE);
+        }
+        let audit = match &self.pops {
+            Some(p) => (&p.drawn, true),
+            None => (&self.no_audit, false),
         };
         for (request, cull) in self.requests.iter().zip(&mut self.culls) {
             let [w0, _, _, w3] = request.window;
@@ -686,9 +755,25 @@ impl World {
                     capacity: &capacity,
                     draws: &request.draws,
                     pyramid: &pyramid,
+                    audit,
                 },
             )?;
             self.runs_scratch = runs;
+        }
+        if let Some(p) = &mut self.pops {
+            // The narrowest fade a tree's presence follows: the tree distance's, or a band's
+            // ramp.
+            let mut fade = range * TREE_DISTANCE_FADE;
+            for r in &self.requests {
+                let [w0, w1, w2, w3] = r.window;
+                for width in [w1 - w0, w3 - w2] {
+                    if width > 0.0 && width < 1e29 {
+                        fade = fade.min(width);
+                    }
+                }
+            }
+            let camera = view.frustums[0].as_ref().map(|f| (f, view.eye));
+            p.record(gpu, encoder, &self.pool, camera, fade);
         }
         self.wanted = Some(wanted);
         stats.tiles_resident = self.resident.len() as u32;
@@ -714,6 +799,9 @@ impl World {
             }
             self.stats.trees_occluded += cull.occluded();
         }
+        if let Some(p) = &mut self.pops {
+            self.stats.pops = Some(p.finish(gpu)?);
+        }
         Ok(())
     }
 
@@ -730,12 +818,12 @@ impl World {
     }
 
     fn tile_may_be_seen(&self, key: TileKey, view: &WorldView<'_>) -> bool {
-        // The tile's column, from below the lowest terrain to above the tallest tree: a
-        // conservative box until its trees are known.
+        // The tile's column, from below the lowest terrain to above the tallest tree, widened
+        // by the crowns' overhang: a conservative box until its trees are known.
         let t = self.settings.tile_m;
-        let min = Vec3::new(key.x as f32 * t, -1e5, key.z as f32 * t) - Vec3::splat(50.0);
-        let max =
-            Vec3::new((key.x + 1) as f32 * t, 1e5, (key.z + 1) as f32 * t) + Vec3::splat(50.0);
+        let pad = Vec3::splat(self.overhang.max(50.0));
+        let min = Vec3::new(key.x as f32 * t, -1e5, key.z as f32 * t) - pad;
+        let max = Vec3::new((key.x + 1) as f32 * t, 1e5, (key.z + 1) as f32 * t) + pad;
         view.frustums
             .iter()
             .flatten()
@@ -899,7 +987,7 @@ impl World {
             .resident
             .keys()
             .map(|&k| (k.distance(eye, t), k))
-            .filter(|&(d, _)| d > range)
+            .filter(|&(d, _)| d > range + self.overhang)
             .collect();
         far.sort_by(|a, b| b.0.total_cmp(&a.0));
         let mut evicted = 0;

@@ -22,6 +22,12 @@ pub struct BenchArgs {
     /// duration·i/(N−1); the JSON gains `path` and `per_frame` (t, ms, counts per frame).
     #[arg(long, value_name = "FILE.toml")]
     pub path: Option<PathBuf>,
+    /// Count, per frame, the trees inside the view in this frame and the last that appeared,
+    /// vanished or changed presence by more than the world's fades allow (`pops_*` in the
+    /// world's statistics and `per_frame`; GPU-driven techniques; waits for each frame's
+    /// counts, so time frames without it).
+    #[arg(long)]
+    pub count_pops: bool,
 }
 
 /// Most frames a bench may ask for.
@@ -49,6 +55,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
         None => (0.0, r.camera),
     };
     let (gpu, mut renderer, bake_ms) = prepare(&r)?;
+    renderer.set_pop_audit(&gpu, args.count_pops)?;
     let ready_ms = start.elapsed().as_secs_f64() * 1e3;
     let first = renderer.render(&gpu, &camera_at(0).1, &r.sun)?;
     let startup_ms = ready_ms + first.cpu_ms;

@@ -267,6 +267,22 @@ pub(super) fn billboard(
     }
 }
 
+/// Which of the 3 view samples a caster uses: the largest weight, the weights quantised to
+/// 1/1024 and the first of equal ones — so that a tie in exact arithmetic (the sun on a
+/// symmetry plane of the direction set, as for a tree turned by 0 under a sun at 135°) is
+/// broken alike by the CPU and by a GPU whose rounding differs (`select.wgsl`'s `caster`; on
+/// GL the unquantised choice differed for one tree of a test grove: ꟻLIP 0.0053).
+pub(super) fn caster_sample(w: [f32; 3]) -> usize {
+    let q = w.map(|x| (x * 1024.0).floor());
+    let mut best = 0;
+    for k in 1..3 {
+        if q[k] > q[best] {
+            best = k;
+        }
+    }
+    best
+}
+
 /// One shadow-caster record: seen from the sun only coverage matters, so the nearest of the
 /// view samples `views` (looked up from the sun, in the object's frame) alone — blending 3
 /// samples' differing silhouettes thins the crown's coverage, and with it its shadow (on the
@@ -281,7 +297,7 @@ pub(super) fn caster(
     radius: f32,
 ) -> GpuHbtInstance {
     let (v, vw) = views;
-    let best = (0..3).max_by(|&a, &b| vw[a].total_cmp(&vw[b])).unwrap_or(0);
+    let best = caster_sample(vw);
     let mut inst = billboard(
         to_world,
         set,

@@ -178,9 +178,12 @@ fn billboard(m0: vec4<f32>, m1: vec4<f32>, m2: vec4<f32>, image_set: u32, v: Dir
 
 // A shadow caster (gpu.rs `caster`): the nearest view sample to the sun alone.
 fn caster(m0: vec4<f32>, m1: vec4<f32>, m2: vec4<f32>, image_set: u32, v: DirLookup, extra: vec4<f32>) -> Inst {
+    // gpu.rs `caster_sample`: the largest weight quantised to 1/1024, the first of equal ones
+    // (a tie in exact arithmetic broken alike on the CPU and here).
+    let q = floor(v.weights * 1024.0);
     var best = 0u;
     for (var k = 1u; k < 3u; k++) {
-        if (v.weights[k] > v.weights[best]) {
+        if (q[k] > q[best]) {
             best = k;
         }
     }
