@@ -571,9 +571,18 @@ fn a_streaming_flight_pops_no_tree_and_the_audit_changes_no_pixel() {
         assert!(w["pops_step"] < 0.25, "step {step}: {w:?}");
         plain.render(&gpu, &camera(step), &s.sun).expect("frame");
         if step % 8 == 7 {
-            let a = audited.read_image(&gpu).unwrap();
-            let b = plain.read_image(&gpu).unwrap();
-            assert!(a == b, "step {step}: the audit changed the picture");
+            let rgb = |r: &Renderer| {
+                image::DynamicImage::ImageRgba8(r.read_image(&gpu).unwrap()).into_rgb8()
+            };
+            // (Equal up to the order of blended impostors within a distance bucket, which the
+            // GPU's atomics decide: byte-identical on Vulkan, not always on GL.)
+            let f = sylvan_eval::flip(&rgb(&audited), &rgb(&plain))
+                .unwrap()
+                .mean;
+            assert!(
+                f <= 0.001,
+                "step {step}: the audit changed the picture (ꟻLIP {f})"
+            );
         }
     }
     eprintln!("tiles inserted {inserted}, evicted {evicted}, trees drawn {drawn}");
