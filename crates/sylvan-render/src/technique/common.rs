@@ -470,3 +470,30 @@ pub(crate) fn storage(
         mapped_at_creation: false,
     })
 }
+
+/// A GPU-written list of `records`: its parked records (`parked` bytes each, a storage buffer)
+/// and its output (`out` bytes each, also a vertex buffer), labelled `{prefix}_parked_{label}`
+/// and `{prefix}_{label}` (`boxtree`'s and `hbt`'s GPU-driven frames).
+pub(crate) fn parked_lists(
+    gpu: &Gpu,
+    prefix: &str,
+    label: &str,
+    records: u32,
+    parked: u64,
+    out: u64,
+) -> (wgpu::Buffer, wgpu::Buffer) {
+    (
+        storage(
+            gpu,
+            &format!("{prefix}_parked_{label}"),
+            wgpu::BufferUsages::empty(),
+            records as u64 * parked,
+        ),
+        storage(
+            gpu,
+            &format!("{prefix}_{label}"),
+            wgpu::BufferUsages::VERTEX,
+            records as u64 * out,
+        ),
+    )
+}

@@ -14,7 +14,7 @@ use super::draw::GpuImpostor;
 use crate::RenderError;
 use crate::frame::CASCADES;
 use crate::technique::FrameInput;
-use crate::technique::common::{LateReadback, storage};
+use crate::technique::common::{LateReadback, parked_lists, storage};
 use crate::world::Culled;
 use bytemuck::{Pod, Zeroable};
 use sylvan_gpu::{Gpu, layout};
@@ -96,31 +96,6 @@ pub(super) struct GpuTraversal {
     pub reallocations: u32,
     /// Records that did not fit in the last frame read back.
     pub dropped: u64,
-}
-
-/// A list of `records`: its parked records (`parked` bytes each) and its output (`out` bytes
-/// each, a vertex buffer).
-fn lists(
-    gpu: &Gpu,
-    label: &str,
-    records: u32,
-    parked: u64,
-    out: u64,
-) -> (wgpu::Buffer, wgpu::Buffer) {
-    (
-        storage(
-            gpu,
-            &format!("boxtree_parked_{label}"),
-            wgpu::BufferUsages::empty(),
-            records as u64 * parked,
-        ),
-        storage(
-            gpu,
-            &format!("boxtree_{label}"),
-            wgpu::BufferUsages::VERTEX,
-            records as u64 * out,
-        ),
-    )
 }
 
 impl GpuTraversal {
@@ -209,8 +184,9 @@ impl GpuTraversal {
         tables_rows.extend(box_rows);
         // Placeholder buffers: capacity 0 until the first frame sizes the lists.
         let caps = [0u32, 0];
-        let (parked_imp, out_imp) = lists(gpu, "impostors", 0, 32, IMPOSTOR_BYTES);
-        let (parked_res, out_res) = lists(gpu, "residual", 0, 16, TREE_BYTES);
+        let (parked_imp, out_imp) =
+            parked_lists(gpu, "boxtree", "impostors", 0, 32, IMPOSTOR_BYTES);
+        let (parked_res, out_res) = parked_lists(gpu, "boxtree", "residual", 0, 16, TREE_BYTES);
         Ok(Self {
             prep: compute("prep", true),
             traverse: compute("traverse", false),
@@ -461,12 +437,14 @@ impl GpuTraversal {
         let imp = fit(want[0], IMPOSTOR_BYTES);
         let res = fit(want[1], TREE_BYTES);
         if imp > self.caps[0] {
-            (self.parked_imp, self.out_imp) = lists(gpu, "impostors", imp, 32, IMPOSTOR_BYTES);
+            (self.parked_imp, self.out_imp) =
+                parked_lists(gpu, "boxtree", "impostors", imp, 32, IMPOSTOR_BYTES);
             self.caps[0] = imp;
             self.bind = None;
         }
         if res > self.caps[1] {
-            (self.parked_res, self.out_res) = lists(gpu, "residual", res, 16, TREE_BYTES);
+            (self.parked_res, self.out_res) =
+                parked_lists(gpu, "boxtree", "residual", res, 16, TREE_BYTES);
             self.caps[1] = res;
             self.bind = None;
         }

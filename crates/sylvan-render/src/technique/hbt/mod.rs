@@ -493,7 +493,7 @@ impl Default for HbtDrawParams {
             // Measured (640×360, ꟻLIP vs 16-spp geometry): without them `hbt` is closer to the
             // reference, whose sky term has no occlusion between trees — 0.0711 against 0.0728
             // on assets/scenes/example.toml, 0.0934 against 0.0936 on eval/broadleaf.toml — and
-            // starts 6.6 s sooner on the former (BENCHMARKS.md, "hbt GPU-driven").
+            // starts 6.6 s sooner on the former (BENCHMARKS.md, "`hbt` GPU-driven").
             scene_visibility: false,
             min_weight: 0.05,
             projection: HbtProjection::Facing,

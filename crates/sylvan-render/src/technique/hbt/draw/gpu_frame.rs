@@ -20,7 +20,7 @@ use crate::RenderError;
 use crate::directions::{DIRECTIONS_WGSL, DirectionLut};
 use crate::frame::CASCADES;
 use crate::technique::FrameInput;
-use crate::technique::common::{LateReadback, storage};
+use crate::technique::common::{LateReadback, parked_lists, storage};
 use crate::technique::hbt::{HbtDrawParams, HbtProjection, HbtShadows};
 use crate::world::Culled;
 use bytemuck::{Pod, Zeroable};
@@ -256,8 +256,9 @@ impl HbtGpuFrame {
             })
         };
         let segs = BB_SEGS + PASSES as u32 * species;
-        let (parked_bb, out_bb) = lists(gpu, "billboards", 0, BB_BYTES + 16, BB_BYTES);
-        let (parked_mesh, out_mesh) = lists(gpu, "meshes", 0, 16, TREE_BYTES);
+        let (parked_bb, out_bb) =
+            parked_lists(gpu, "hbt", "billboards", 0, BB_BYTES + 16, BB_BYTES);
+        let (parked_mesh, out_mesh) = parked_lists(gpu, "hbt", "meshes", 0, 16, TREE_BYTES);
         Ok(Self {
             prep: compute("prep", true),
             select: compute("select_levels", false),
@@ -494,12 +495,14 @@ impl HbtGpuFrame {
         let bb = fit(want[0], BB_BYTES + 16);
         let mesh = fit(want[1], TREE_BYTES);
         if bb > self.caps[0] {
-            (self.parked_bb, self.out_bb) = lists(gpu, "billboards", bb, BB_BYTES + 16, BB_BYTES);
+            (self.parked_bb, self.out_bb) =
+                parked_lists(gpu, "hbt", "billboards", bb, BB_BYTES + 16, BB_BYTES);
             self.caps[0] = bb;
             self.bind = None;
         }
         if mesh > self.caps[1] {
-            (self.parked_mesh, self.out_mesh) = lists(gpu, "meshes", mesh, 16, TREE_BYTES);
+            (self.parked_mesh, self.out_mesh) =
+                parked_lists(gpu, "hbt", "meshes", mesh, 16, TREE_BYTES);
             self.caps[1] = mesh;
             self.bind = None;
         }
@@ -537,29 +540,4 @@ impl HbtGpuFrame {
     pub fn opened_meshed(&self) -> (u32, u32) {
         (self.counts.opened, self.counts.meshed)
     }
-}
-
-/// A list of `records`: its parked records (`parked` bytes each) and its output (`out` bytes
-/// each, a vertex buffer).
-fn lists(
-    gpu: &Gpu,
-    label: &str,
-    records: u32,
-    parked: u64,
-    out: u64,
-) -> (wgpu::Buffer, wgpu::Buffer) {
-    (
-        storage(
-            gpu,
-            &format!("hbt_parked_{label}"),
-            wgpu::BufferUsages::empty(),
-            records as u64 * parked,
-        ),
-        storage(
-            gpu,
-            &format!("hbt_{label}"),
-            wgpu::BufferUsages::VERTEX,
-            records as u64 * out,
-        ),
-    )
 }
