@@ -22,7 +22,7 @@ echo "| meshes by | mesh threshold px | FLIP | median ms (2 rounds) | cpu ms | c
 echo "|---|---|---|---|---|---|---|---|---|---|"
 for cfg in "${configs[@]}"; do
   set -- $cfg
-  $S render --size 1280x720 --technique hbt --set hbt.mesh_per_branch=$([ $1 = branch ] && echo true || echo false) --set hbt.mesh_texel_pixels=$2 --out "$OUT/default-$1-$2.png" 2>>"$OUT/log.txt"
+  $S render --size 1280x720 --technique hbt --cpu-driven --set hbt.mesh_per_branch=$([ $1 = branch ] && echo true || echo false) --set hbt.mesh_texel_pixels=$2 --out "$OUT/default-$1-$2.png" 2>>"$OUT/log.txt"
 done
 for round in 1 2; do
   for cfg in geometry "${configs[@]}"; do
@@ -31,7 +31,7 @@ for round in 1 2; do
       [ $round = 1 ] && $S bench --size 1280x720 --frames 5 --json > "$OUT/bench-geometry.json"
       continue
     fi
-    $S bench --size 1280x720 --technique hbt --set hbt.mesh_per_branch=$([ $1 = branch ] && echo true || echo false) --set hbt.mesh_texel_pixels=$2 --frames 5 --json > "$OUT/bench-$1-$2-$round.json"
+    $S bench --size 1280x720 --technique hbt --cpu-driven --set hbt.mesh_per_branch=$([ $1 = branch ] && echo true || echo false) --set hbt.mesh_texel_pixels=$2 --frames 5 --json > "$OUT/bench-$1-$2-$round.json"
   done
 done
 for cfg in "${configs[@]}"; do
@@ -59,7 +59,7 @@ for d in 60 120 180; do
   $S render $SCENE "${common[@]}" --out "$OUT/fir-$d-geometry.png" 2>>"$OUT/log.txt"
   row="| $d | $h | $(flip "$OUT/fir-$d-ref.png" "$OUT/fir-$d-geometry.png" "${crop[@]}") |"
   for by in tree branch; do
-    $S render $SCENE "${common[@]}" --technique hbt --set hbt.mesh_per_branch=$([ $by = branch ] && echo true || echo false) --out "$OUT/fir-$d-$by.png" --stats "$OUT/fir-$d-$by.json" 2>>"$OUT/log.txt"
+    $S render $SCENE "${common[@]}" --technique hbt --cpu-driven --set hbt.mesh_per_branch=$([ $by = branch ] && echo true || echo false) --out "$OUT/fir-$d-$by.png" --stats "$OUT/fir-$d-$by.json" 2>>"$OUT/log.txt"
     row="$row $(flip "$OUT/fir-$d-ref.png" "$OUT/fir-$d-$by.png" "${crop[@]}") |"
   done
   stat() { python3 -c "import json; print(json.load(open('$1')).get('hbt', {}).get('$2') or 0)"; }

@@ -38,9 +38,9 @@ for d in 20 35 60; do
   declare -A cfg=(
     [geometry]="--technique geometry"
     [main]="--technique hbt --set hbt.levels=2"
-    [small]="--technique hbt --set hbt.levels=2 --set hbt.small_branches=true"
+    [small]="--technique hbt --cpu-driven --set hbt.levels=2 --set hbt.small_branches=true"
     [default]="--technique hbt"
-    [default-small]="--technique hbt --set hbt.small_branches=true"
+    [default-small]="--technique hbt --cpu-driven --set hbt.small_branches=true"
   )
   row="| $d | $h"
   for k in geometry main small default default-small; do

@@ -83,7 +83,7 @@ for size in 480x270 1280x720; do
   [ -f "$REFS/default-$size-geometry.png" ] || $S render --size $size --out "$REFS/default-$size-geometry.png" 2>>"$OUT/log.txt"
   $S render --size $size --technique hbt --out "$OUT/default-$size-hbt.png" --stats "$OUT/default-$size-hbt.json" 2>>"$OUT/log.txt"
   $S render --size $size --technique hbt --set hbt.levels=2 --out "$OUT/default-$size-hbt-l2.png" 2>>"$OUT/log.txt"
-  $S render --size $size --technique hbt --set hbt.levels=2 --set hbt.shadows=cubemaps --out "$OUT/default-$size-hbt-cubemaps.png" 2>>"$OUT/log.txt"
+  $S render --size $size --technique hbt --cpu-driven --set hbt.levels=2 --set hbt.shadows=cubemaps --out "$OUT/default-$size-hbt-cubemaps.png" 2>>"$OUT/log.txt"
   $S render --size $size --technique hbt --set hbt.levels=1 --out "$OUT/default-$size-hbt-l1.png" 2>>"$OUT/log.txt"
   $S render --size $size --technique hbt --set hbt.tree_from_branches=true --out "$OUT/default-$size-hbt-composed.png" 2>>"$OUT/log.txt"
   echo "| $size | $(flip "$ref" "$REFS/default-$size-geometry.png") | $(flip "$ref" "$OUT/default-$size-hbt.png") | $(flip "$ref" "$OUT/default-$size-hbt-l2.png") | $(flip "$ref" "$OUT/default-$size-hbt-cubemaps.png") | $(flip "$ref" "$OUT/default-$size-hbt-l1.png") | $(flip "$ref" "$OUT/default-$size-hbt-composed.png") |"
