@@ -234,6 +234,11 @@ pub struct GroundCover {
     reach_m: f32,
     /// Milliseconds the last frame waited for tiles.
     wait_ms: f64,
+    /// Produced, not uploaded yet: the ring's tiles, paced as the world's
+    /// ([`super::ring_inserts`]).
+    arrived: Vec<CoverTile>,
+    /// The eye's last position (horizontal).
+    last_eye: Option<Vec2>,
 }
 
 /// What the ground-cover uniforms hold besides the atlas's shape.
@@ -330,6 +335,8 @@ impl GroundCover {
             produced: 0,
             reach_m: settings.reach_m,
             wait_ms: 0.0,
+            arrived: Vec::new(),
+            last_eye: None,
         })
     }
 
@@ -376,11 +383,12 @@ impl GroundCover {
     }
 
     /// Per frame: asks for the tiles of the window around `eye`, waits for those within
-    /// `range` that the camera may see, and uploads what arrived.
+    /// `range` that the camera may see, and uploads them and, paced by the eye's speed, the
+    /// others that arrived (a row of the window arrives at once when the eye enters a tile).
     pub(crate) fn prepare(&mut self, gpu: &Gpu, eye: Vec3, range: f32, camera: &Frustum) {
-        let Some(producer) = &mut self.producer else {
+        if self.producer.is_none() {
             return;
-        };
+        }
         let range = range.min(self.reach_m);
         let t = self.layout.tile_m;
         let n = self.cells as i32;
@@ -389,6 +397,17 @@ impl GroundCover {
             (e - n / 2).clamp(0, (self.tiles[a] - n).max(0))
         });
         let p = Vec2::new(eye.x, eye.z);
+        let step = self.last_eye.map_or(0.0, |l| l.distance(p));
+        self.last_eye = Some(p);
+        if self.arrived.is_empty() && self.filled_around(lo) {
+            self.wait_ms = 0.0;
+            return;
+        }
+        let Some(producer) = &mut self.producer else {
+            return;
+        };
+        let queued: std::collections::HashSet<TileKey> =
+            self.arrived.iter().map(|a| a.key).collect();
         let mut wanted = Vec::new();
         for z in lo[1]..(lo[1] + n).min(self.tiles[1]) {
             for x in lo[0]..(lo[0] + n).min(self.tiles[0]) {
@@ -398,30 +417,52 @@ impl GroundCover {
                 }
             }
         }
-        producer.request(wanted.iter().copied());
+        producer.request(wanted.iter().copied().filter(|w| !queued.contains(&w.1)));
         let keep: std::collections::HashSet<TileKey> = wanted.iter().map(|w| w.1).collect();
         producer.cancel(|k| keep.contains(&k));
+        let needed = |k: TileKey| {
+            let min = Vec3::new(k.x as f32 * t, -1e5, k.z as f32 * t);
+            k.distance(p, t) <= range && camera.intersects_box(min, min + Vec3::new(t, 2e5, t))
+        };
         let must: Vec<TileKey> = wanted
             .iter()
-            .filter(|&&(d, k)| {
-                let min = Vec3::new(k.x as f32 * t, -1e5, k.z as f32 * t);
-                d <= range && camera.intersects_box(min, min + Vec3::new(t, 2e5, t))
-            })
             .map(|w| w.1)
+            .filter(|&k| !queued.contains(&k) && needed(k))
             .collect();
-        let mut arrived = producer.finished();
+        self.arrived.extend(producer.finished());
         let start = std::time::Instant::now();
         if !must.is_empty() {
-            arrived.extend(producer.wait_for(&must));
+            self.arrived.extend(producer.wait_for(&must));
         }
         self.wait_ms = start.elapsed().as_secs_f64() * 1e3;
-        for tile in arrived {
-            if !keep.contains(&tile.key) {
-                continue;
-            }
+        self.arrived.retain(|a| keep.contains(&a.key));
+        // Those the camera needs now, then the ring nearest first, at the eye's pace.
+        self.arrived.sort_by(|a, b| {
+            let key = |x: &CoverTile| (!needed(x.key), x.key.distance(p, t));
+            let (ka, kb) = (key(a), key(b));
+            ka.0.cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
+        });
+        let now = self.arrived.iter().take_while(|a| needed(a.key)).count();
+        let slack: Vec<(f32, u64)> = (self.arrived[now..].iter())
+            .map(|a| (a.key.distance(p, t) - range, a.texels.len() as u64 * 4))
+            .collect();
+        // (At rest, all: a tile of cover is a 64 KiB upload, and the window's tiles arrive at
+        // the workers' pace.)
+        let take = now + super::ring_inserts(&slack, step, u64::MAX);
+        let batch: Vec<CoverTile> = self.arrived.drain(..take).collect();
+        for tile in batch {
             self.upload(gpu, &tile);
             self.produced += 1;
         }
+    }
+
+    /// Whether every cell of the window from `lo` holds its tile.
+    fn filled_around(&self, lo: [i32; 2]) -> bool {
+        let n = self.cells as i32;
+        (lo[1]..(lo[1] + n).min(self.tiles[1])).all(|z| {
+            (lo[0]..(lo[0] + n).min(self.tiles[0]))
+                .all(|x| self.filled[cell(TileKey { x, z }, n)] == Some(TileKey { x, z }))
+        })
     }
 
     fn upload(&mut self, gpu: &Gpu, tile: &CoverTile) {

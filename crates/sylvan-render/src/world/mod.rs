@@ -50,12 +50,15 @@ use sylvan_scene::Scene;
 pub const PAGE: u32 = 256;
 /// Passes the lists serve: the camera and each cascade.
 pub const PASSES: usize = 1 + CASCADES;
-/// Tiles of the prefetch ring inserted into the pool per frame, at most (bytes; tiles a pass
-/// sees are always inserted at once). Above the ring's arrival rate on a fast flight (about 7
-/// tiles of 0.2 MB per frame over forest-10m at 100 m per frame): at 1 MiB the backlog grew
-/// until its tiles came into view and a frame inserted 12 at once (2.6–2.9× the median CPU
-/// time, BENCHMARKS "Streaming").
-const INSERT_BYTES_PER_FRAME: u64 = 2 << 20;
+/// How much sooner than the eye could reach them the prefetch ring's tiles are inserted
+/// (see [`ring_inserts`]).
+const RING_MARGIN: f32 = 1.25;
+/// Frames over which the ring's tiles already in reach that no pass sees are inserted.
+const SOON_FRAMES: f32 = 8.0;
+/// The ring's tiles inserted per frame while the eye rests, at most (bytes): the ring fills
+/// within a few frames, ready for whatever speed the eye starts at, and then a frame does
+/// nothing (forest-10m: ~10 tiles a frame).
+const REST_BYTES: u64 = 2 << 20;
 
 /// Tiles of the prefetch ring seeded on the GPU per frame, at most, and batches of them in
 /// flight (their results are read in a later frame, without waiting; tiles a pass sees are
@@ -222,7 +225,7 @@ pub struct World {
     seeding: Vec<SeedBatch>,
     source: Arc<Source>,
     resident: HashMap<TileKey, Resident>,
-    /// Produced, not inserted yet (see [`INSERT_BYTES_PER_FRAME`]).
+    /// Produced, not inserted yet (see [`ring_inserts`]).
     arrived: Vec<TileTrees>,
     pool: wgpu::Buffer,
     free_pages: Vec<u32>,
@@ -248,8 +251,11 @@ pub struct World {
     cancel_due: bool,
     /// The run records of a cull, kept between frames (no allocation per frame).
     runs_scratch: Vec<cull::GpuRun>,
-    /// Counts the changes to `resident` (a tile inserted or evicted).
-    generation: u64,
+    /// The changes to `resident` since the last frame's snapshot, in order (the tile, and
+    /// whether it was inserted or evicted): what [`Wanted::snap`] applies.
+    changed: Vec<(TileKey, bool)>,
+    /// The eye's last position (horizontal): how far it moves per frame paces the ring.
+    last_eye: Option<Vec2>,
     /// How far a tree's crown sphere may reach beyond its tile's square, horizontally
     /// (metres): a tile that near the range may hold trees the cull draws.
     overhang: f32,
@@ -269,20 +275,22 @@ struct Wanted {
     /// Nearest the eye's tile first.
     tiles: Vec<TileKey>,
     set: std::collections::HashSet<TileKey>,
-    /// The resident ones among `tiles`, in their order, as the per-pass tile cull reads them:
-    /// one contiguous copy (not a hash look-up and three heap vectors per tile per frame),
-    /// made again when a tile is inserted or evicted.
+    /// The resident ones among `tiles`, as the per-pass tile cull reads them: one contiguous
+    /// copy (not a hash look-up and three heap vectors per tile per frame), made when the
+    /// wanted tiles change and then kept up to date tile by tile as tiles are inserted or
+    /// evicted (in `tiles`' order when made; an inserted tile goes last).
     snapshot: Vec<SnapTile>,
     /// The snapshot's species counts and runs of consecutive pages (`passes`, `row` 0), tile
-    /// after tile.
+    /// after tile (an evicted tile's stay, unreferenced, until the snapshot is made again).
     snap_species: Vec<u32>,
     snap_runs: Vec<cull::GpuRun>,
-    /// [`World::generation`] the snapshot was made at (`u64::MAX`: never).
-    snap_generation: u64,
+    /// Whether the snapshot was made.
+    snapped: bool,
 }
 
 /// A resident tile in [`Wanted::snapshot`].
 struct SnapTile {
+    key: TileKey,
     min: Vec3,
     max: Vec3,
     count: u32,
@@ -300,44 +308,73 @@ impl Wanted {
             snapshot: Vec::new(),
             snap_species: Vec::new(),
             snap_runs: Vec::new(),
-            snap_generation: u64::MAX,
+            snapped: false,
         }
     }
 
-    /// Makes the snapshot again if the residents changed since it was made.
-    fn snap(&mut self, resident: &HashMap<TileKey, Resident>, generation: u64) {
-        if self.snap_generation == generation {
+    /// Brings the snapshot up to date with `changed` (the residents' changes since the last
+    /// call, which it empties): a tile at a time, or all again the first time and when the
+    /// evicted tiles' records outnumber the live ones (so a frame that inserts a tile does
+    /// not pay for every tile in range).
+    fn snap(&mut self, resident: &HashMap<TileKey, Resident>, changed: &mut Vec<(TileKey, bool)>) {
+        let live: usize = self.snapshot.iter().map(|t| t.runs.len()).sum();
+        if !self.snapped || self.snap_runs.len() - live > live + 64 {
+            self.snapped = true;
+            changed.clear();
+            self.snapshot.clear();
+            self.snap_species.clear();
+            self.snap_runs.clear();
+            for i in 0..self.tiles.len() {
+                let key = self.tiles[i];
+                if let Some(r) = resident.get(&key) {
+                    self.push(key, r);
+                }
+            }
             return;
         }
-        self.snap_generation = generation;
-        self.snapshot.clear();
-        self.snap_species.clear();
-        self.snap_runs.clear();
-        for &key in &self.tiles {
-            let Some(r) = resident.get(&key) else {
+        for (key, inserted) in changed.drain(..) {
+            if !self.set.contains(&key) {
                 continue;
-            };
-            let species = self.snap_species.len();
-            self.snap_species.extend(&r.species_counts);
-            let runs = self.snap_runs.len();
-            // Only a tile's last page is partial, so consecutive pages make one run.
-            for run in page_runs(&r.pages) {
-                let first = run.start as u32 * PAGE;
-                self.snap_runs.push(cull::GpuRun {
-                    first: r.pages[run.start] * PAGE,
-                    count: (r.count - first).min(run.len() as u32 * PAGE),
-                    passes: 0,
-                    row: 0,
-                });
             }
-            self.snapshot.push(SnapTile {
-                min: r.min,
-                max: r.max,
-                count: r.count,
-                species: species..self.snap_species.len(),
-                runs: runs..self.snap_runs.len(),
+            match inserted {
+                true => {
+                    // (Evicted again later in the log: its eviction finds it.)
+                    if let Some(r) = resident.get(&key) {
+                        self.push(key, r);
+                    }
+                }
+                false => {
+                    if let Some(i) = self.snapshot.iter().position(|t| t.key == key) {
+                        self.snapshot.swap_remove(i);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Appends resident tile `key` to the snapshot.
+    fn push(&mut self, key: TileKey, r: &Resident) {
+        let species = self.snap_species.len();
+        self.snap_species.extend(&r.species_counts);
+        let runs = self.snap_runs.len();
+        // Only a tile's last page is partial, so consecutive pages make one run.
+        for run in page_runs(&r.pages) {
+            let first = run.start as u32 * PAGE;
+            self.snap_runs.push(cull::GpuRun {
+                first: r.pages[run.start] * PAGE,
+                count: (r.count - first).min(run.len() as u32 * PAGE),
+                passes: 0,
+                row: 0,
             });
         }
+        self.snapshot.push(SnapTile {
+            key,
+            min: r.min,
+            max: r.max,
+            count: r.count,
+            species: species..self.snap_species.len(),
+            runs: runs..self.snap_runs.len(),
+        });
     }
 }
 
@@ -435,7 +472,8 @@ impl World {
             asking: true,
             cancel_due: false,
             runs_scratch: Vec::new(),
-            generation: 0,
+            changed: Vec::new(),
+            last_eye: None,
             overhang,
             pops: None,
             no_audit: crate::technique::common::storage(
@@ -609,23 +647,28 @@ impl World {
         self.arrived
             .retain(|t| wanted.set.contains(&t.key) && !resident.contains_key(&t.key));
         // 3. This frame inserts every arrived tile a pass sees, and others (the ring) nearest
-        // first within a per-frame byte budget, so a burst of arrivals is spread over frames.
+        // first at the pace the eye's speed asks for, so a burst of arrivals (a ring row when
+        // the eye enters a tile) is spread over the frames before the eye can reach it.
         self.arrived.sort_by(|a, b| {
             let key = |x: &TileTrees| (!visible.contains(&x.key), x.key.distance(eye, t));
             let (ka, kb) = (key(a), key(b));
             ka.0.cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
         });
-        let mut take = 0;
-        let mut incoming = 0u64;
-        for tile in &self.arrived {
-            let b = page_bytes(tile.trees.len() as u32);
-            if !visible.contains(&tile.key) && incoming + b > INSERT_BYTES_PER_FRAME && take > 0 {
-                break;
-            }
-            incoming += b;
-            take += 1;
-        }
-        // Room for them within the budget: evict the farthest tiles not in range first.
+        let step = self.last_eye.map_or(0.0, |p| p.distance(eye));
+        self.last_eye = Some(eye);
+        let seen_now = (self.arrived.iter())
+            .take_while(|a| visible.contains(&a.key))
+            .count();
+        let slack: Vec<(f32, u64)> = (self.arrived[seen_now..].iter())
+            .map(|a| {
+                let d = a.key.distance(eye, t) - (range + self.overhang);
+                (d, page_bytes(a.trees.len() as u32))
+            })
+            .collect();
+        let take = seen_now + ring_inserts(&slack, step, REST_BYTES);
+        let incoming = (self.arrived[..take].iter())
+            .map(|a| page_bytes(a.trees.len() as u32))
+            .sum();
         stats.tiles_evicted = self.evict(eye, range, incoming);
         let batch: Vec<TileTrees> = self.arrived.drain(..take).collect();
         stats.tiles_inserted = batch.len() as u32;
@@ -669,7 +712,7 @@ impl World {
         } else {
             f32::INFINITY
         };
-        wanted.snap(&self.resident, self.generation);
+        wanted.snap(&self.resident, &mut self.changed);
         let mut seen: Vec<(&SnapTile, u32, f32, f32)> = Vec::new();
         for r in &wanted.snapshot {
             // The tile's trees' spheres against the range, as the cull tests each tree (its
@@ -884,7 +927,7 @@ impl World {
             for ((key, mut pages), r) in batch.keys.into_iter().zip(batch.pages).zip(results) {
                 self.free_pages
                     .extend(pages.drain(r.count.div_ceil(PAGE) as usize..).rev());
-                self.generation += 1;
+                self.changed.push((key, true));
                 self.resident.insert(
                     key,
                     Resident {
@@ -926,7 +969,7 @@ impl World {
                 bytemuck::cast_slice(chunk),
             );
         }
-        self.generation += 1;
+        self.changed.push((tile.key, true));
         self.resident.insert(
             tile.key,
             Resident {
@@ -997,7 +1040,7 @@ impl World {
             }
             if let Some(r) = self.resident.remove(&key) {
                 self.free_pages.extend(r.pages);
-                self.generation += 1;
+                self.changed.push((key, false));
                 evicted += 1;
             }
         }
@@ -1007,7 +1050,38 @@ impl World {
     }
 }
 
-/// Tile workers per producer: the cores but one (the render thread's), 1 to 8.
+/// How many of the prefetch ring's arrived tiles a frame inserts: `queue[i]` is how far the
+/// eye is from making the `i`-th (nearest first) a tile a pass sees and its bytes, `step_m`
+/// how far the eye moved since the last frame. While it moves: the least constant pace that
+/// inserts each [`RING_MARGIN`] times sooner than the eye could reach it, at least one a frame
+/// — the row that arrives when the eye enters a tile is spread over the frames it takes to
+/// cross that tile instead of landing in a few (each tile is a copy of its trees to the GPU,
+/// ~40 µs on this machine: BENCHMARKS "Streaming"). At rest: `rest_bytes` a frame.
+pub(crate) fn ring_inserts(queue: &[(f32, u64)], step_m: f32, rest_bytes: u64) -> usize {
+    if step_m <= 0.0 {
+        let mut bytes = 0;
+        let n = (queue.iter())
+            .take_while(|q| {
+                bytes += q.1;
+                bytes <= rest_bytes
+            })
+            .count();
+        return n.max(1).min(queue.len());
+    }
+    let mut take = 1;
+    for (i, &(slack, _)) in queue.iter().enumerate() {
+        // Frames before the eye may reach the tile, at this pace, by the margin. A tile in
+        // reach already that no pass sees (behind the camera, at the start or after a jump)
+        // is needed when the camera turns: within a few frames.
+        let frames = match slack > 0.0 {
+            true => slack / (RING_MARGIN * step_m),
+            false => SOON_FRAMES,
+        };
+        take = take.max(((i + 1) as f32 / frames.max(1.0)).ceil() as usize);
+    }
+    take.min(queue.len())
+}
+
 /// The tiles of a `tiles[0] × tiles[1]` grid of `tile_m` squares within `reach`
 /// (horizontal) of some point of tile `at`, nearest `at`'s centre first.
 fn tiles_around(at: TileKey, reach: f32, tile_m: f32, tiles: [i32; 2]) -> Vec<TileKey> {
@@ -1044,6 +1118,7 @@ fn page_runs(pages: &[u32]) -> impl Iterator<Item = std::ops::Range<usize>> + '_
     })
 }
 
+/// Tile workers per producer: the cores but one (the render thread's), 1 to 8.
 pub(crate) fn worker_threads() -> usize {
     std::thread::available_parallelism()
         .map_or(1, |n| n.get())
@@ -1105,8 +1180,113 @@ fn box_distance(p: Vec3, min: Vec3, max: Vec3) -> f32 {
 
 #[cfg(test)]
 mod tests {
-    use super::{TileKey, page_runs, take_pages, tiles_around};
-    use glam::Vec2;
+    use super::{
+        REST_BYTES, Resident, TileKey, Wanted, page_runs, ring_inserts, take_pages, tiles_around,
+    };
+    use glam::{Vec2, Vec3};
+    use std::collections::HashMap;
+
+    /// A snapshot's tile as the cull reads it: key, trees, species counts, runs.
+    type Snapped = (TileKey, u32, Vec<u32>, Vec<(u32, u32)>);
+
+    /// The snapshot as the cull reads it, in key order.
+    fn snapshot_of(w: &Wanted) -> Vec<Snapped> {
+        let mut v: Vec<_> = (w.snapshot.iter())
+            .map(|t| {
+                let runs = w.snap_runs[t.runs.clone()].iter();
+                (
+                    t.key,
+                    t.count,
+                    w.snap_species[t.species.clone()].to_vec(),
+                    runs.map(|r| (r.first, r.count)).collect(),
+                )
+            })
+            .collect();
+        v.sort_by_key(|t| (t.0.x, t.0.z));
+        v
+    }
+
+    #[test]
+    fn the_snapshot_kept_tile_by_tile_is_the_one_made_again() {
+        let tiles: Vec<TileKey> = (0..64).map(|i| TileKey { x: i % 8, z: i / 8 }).collect();
+        let mut kept = Wanted::new(tiles[0], 1000.0, tiles.clone());
+        let mut resident: HashMap<TileKey, Resident> = HashMap::new();
+        let mut changed = Vec::new();
+        // A deterministic walk of inserts and evictions (some of tiles not wanted, some
+        // inserted and evicted between two frames), a snapshot after each frame.
+        let mut state = 12345u32;
+        let mut next_page = 0u32;
+        for frame in 0..300 {
+            for _ in 0..(frame % 5) {
+                state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                let key = TileKey {
+                    x: (state >> 8) as i32 % 9,
+                    z: (state >> 16) as i32 % 8,
+                };
+                if resident.remove(&key).is_some() {
+                    changed.push((key, false));
+                } else {
+                    let count = 1 + (state >> 4) % 900;
+                    let pages: Vec<u32> = (0..count.div_ceil(super::PAGE))
+                        .map(|i| next_page + if i == 1 { 7 } else { i })
+                        .collect();
+                    next_page += 16;
+                    let r = Resident {
+                        pages,
+                        count,
+                        species_counts: vec![count / 2, count - count / 2],
+                        min: Vec3::ZERO,
+                        max: Vec3::ONE,
+                    };
+                    resident.insert(key, r);
+                    changed.push((key, true));
+                }
+            }
+            kept.snap(&resident, &mut changed);
+            assert!(changed.is_empty());
+            let mut fresh = Wanted::new(tiles[0], 1000.0, tiles.clone());
+            fresh.snap(&resident, &mut Vec::new());
+            assert_eq!(snapshot_of(&kept), snapshot_of(&fresh), "frame {frame}");
+        }
+        // Stale records are dropped once they outnumber the live ones.
+        let live: usize = kept.snapshot.iter().map(|t| t.runs.len()).sum();
+        assert!(kept.snap_runs.len() <= 2 * live + 64 + 16);
+    }
+
+    #[test]
+    fn the_ring_is_inserted_before_the_eye_reaches_it_and_spread_over_the_frames() {
+        // At rest: 2 MiB a frame, at least one.
+        assert_eq!(ring_inserts(&[(300.0, 200 << 10); 29], 0.0, REST_BYTES), 10);
+        assert_eq!(ring_inserts(&[(300.0, 4 << 20); 3], 0.0, REST_BYTES), 1);
+        assert_eq!(ring_inserts(&[], 10.0, REST_BYTES), 0);
+        // In reach already but not seen (behind the camera): over a few frames.
+        assert_eq!(ring_inserts(&[(-5.0, 1); 24], 10.0, REST_BYTES), 3);
+        // A row of 29 arriving 240–490 m ahead, every few frames, at 10 and 100 m a frame:
+        // no tile is reached before it is inserted, and no frame inserts much more than the
+        // average.
+        for step in [10.0f32, 100.0] {
+            let mut queue: Vec<(f32, u64)> = Vec::new();
+            let (mut most, mut total, frames) = (0, 0, 400);
+            for frame in 0..frames {
+                if frame % (256.0 / step).ceil() as usize == 0 {
+                    queue.extend((0..29).map(|i| (240.0 + 250.0 * i as f32 / 28.0, 1)));
+                }
+                let take = ring_inserts(&queue, step, REST_BYTES);
+                queue.drain(..take);
+                most = most.max(take);
+                total += take;
+                for (s, _) in &mut queue {
+                    *s -= step;
+                    assert!(*s > 0.0, "reached before inserted at {step} m a frame");
+                }
+            }
+            let mean = total as f32 / frames as f32;
+            assert!(
+                (most as f32) < 3.0 * mean.max(1.0),
+                "{most} vs {mean} at {step} m a frame"
+            );
+        }
+    }
 
     #[test]
     fn the_tiles_around_the_eye_s_tile_hold_every_tile_within_reach_of_the_eye() {
