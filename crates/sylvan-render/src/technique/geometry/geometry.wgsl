@@ -52,12 +52,22 @@ fn vs_plant(in: PlantIn, inst: TreeInstance) -> PlantOut {
     return instance_transform(in, inst);
 }
 
+// During a transition the wood is kept on the share of its pixels that the leaves are kept
+// (screen-door, per pixel): wood drawn whole inside a crown drawn at part of its leaves showed
+// through it (a pine's leader standing above its fading billboard).
+fn wood_dropped(in: PlantOut) -> bool {
+    return in.keep.x < 1.0 && hash13(vec3<f32>(in.pos.xy, 7.0 + 97.0 * in.keep.y)) >= in.keep.x;
+}
+
 @fragment
 fn fs_wood(in: PlantOut) -> @location(0) vec4<f32> {
     let n = normalize(in.normal);
     let l = frame.sun_dir.xyz;
     let ndl = max(dot(n, l), 0.0);
     let vis = select(sun_visibility(in.world, n * 0.05), 0.0, ndl <= 0.0);
+    if (wood_dropped(in)) {
+        discard;
+    }
     let light = frame.sun_color.rgb * ndl * vis + sky_light(n) * in.ao;
     return vec4<f32>(debug_tint(apply_fog(in.color * light, in.world), in.world, TECHNIQUE_GEOMETRY), 1.0);
 }
