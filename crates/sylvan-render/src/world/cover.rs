@@ -397,6 +397,9 @@ impl GroundCover {
             (e - n / 2).clamp(0, (self.tiles[a] - n).max(0))
         });
         let p = Vec2::new(eye.x, eye.z);
+        // The first frame waits for the whole window (as the world's ring): startup ends with
+        // nothing left to upload until the eye moves.
+        let first = self.last_eye.is_none();
         let step = self.last_eye.map_or(0.0, |l| l.distance(p));
         self.last_eye = Some(p);
         if self.arrived.is_empty() && self.filled_around(lo) {
@@ -422,7 +425,9 @@ impl GroundCover {
         producer.cancel(|k| keep.contains(&k));
         let needed = |k: TileKey| {
             let min = Vec3::new(k.x as f32 * t, -1e5, k.z as f32 * t);
-            k.distance(p, t) <= range && camera.intersects_box(min, min + Vec3::new(t, 2e5, t))
+            first
+                || k.distance(p, t) <= range
+                    && camera.intersects_box(min, min + Vec3::new(t, 2e5, t))
         };
         let must: Vec<TileKey> = wanted
             .iter()

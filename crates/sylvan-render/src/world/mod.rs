@@ -621,12 +621,16 @@ impl World {
         stats.tiles_produced = fresh.len() as u32;
         self.arrived.extend(fresh);
         // (None missing when the frame asks for nothing: every wanted tile is resident.)
+        // The first frame waits for the prefetch ring too: startup ends with every wanted tile
+        // resident, so the frames after it stream nothing until the eye moves.
+        let first = self.last_eye.is_none();
         let visible: std::collections::HashSet<TileKey> = match self.asking {
             true => (wanted.tiles.iter())
                 .filter(|&&k| {
-                    k.distance(eye, t) <= range + self.overhang
-                        && !self.resident.contains_key(&k)
-                        && self.tile_may_be_seen(k, view)
+                    !self.resident.contains_key(&k)
+                        && (first
+                            || k.distance(eye, t) <= range + self.overhang
+                                && self.tile_may_be_seen(k, view))
                 })
                 .copied()
                 .collect(),
@@ -679,9 +683,9 @@ impl World {
         // (waited for), and the nearest of the ring (read in a later frame).
         stats.tiles_seeded = self.collect_seeded(gpu, false)?;
         // (Planned only when dispatched: the ring beyond this frame's share costs nothing.)
-        let (seen, ring): (Vec<_>, Vec<_>) = gpu_tiles
-            .into_iter()
-            .partition(|&(d, k)| d <= range + self.overhang && self.tile_may_be_seen(k, view));
+        let (seen, ring): (Vec<_>, Vec<_>) = gpu_tiles.into_iter().partition(|&(d, k)| {
+            first || d <= range + self.overhang && self.tile_may_be_seen(k, view)
+        });
         let plan = |tiles: &mut dyn Iterator<Item = (f32, TileKey)>, seeds: &seed::GpuSeeds| {
             tiles.map(|(_, k)| seeds.plan(k)).collect::<Vec<_>>()
         };
