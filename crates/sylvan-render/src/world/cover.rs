@@ -234,8 +234,7 @@ pub struct GroundCover {
     reach_m: f32,
     /// Milliseconds the last frame waited for tiles.
     wait_ms: f64,
-    /// Produced, not uploaded yet: the ring's tiles, paced as the world's
-    /// ([`super::ring_inserts`]).
+    /// Produced, not uploaded yet: the ring's tiles, paced as the world's ([`super::due`]).
     arrived: Vec<CoverTile>,
     /// The eye's last position (horizontal).
     last_eye: Option<Vec2>,
@@ -441,19 +440,16 @@ impl GroundCover {
         }
         self.wait_ms = start.elapsed().as_secs_f64() * 1e3;
         self.arrived.retain(|a| keep.contains(&a.key));
-        // Those the camera needs now, then the ring nearest first, at the eye's pace.
-        self.arrived.sort_by(|a, b| {
-            let key = |x: &CoverTile| (!needed(x.key), x.key.distance(p, t));
-            let (ka, kb) = (key(a), key(b));
-            ka.0.cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
-        });
-        let now = self.arrived.iter().take_while(|a| needed(a.key)).count();
-        let slack: Vec<(f32, u64)> = (self.arrived[now..].iter())
-            .map(|a| (a.key.distance(p, t) - range, a.texels.len() as u64 * 4))
-            .collect();
-        // (At rest, all: a tile of cover is a 64 KiB upload, and the window's tiles arrive at
-        // the workers' pace.)
-        let take = now + super::ring_inserts(&slack, step, u64::MAX);
+        // Those the camera needs now, then the ring nearest first, at the eye's pace (at rest,
+        // all: a tile of cover is a 64 KiB upload, and the window's tiles arrive at the
+        // workers' pace).
+        let take = super::due(
+            &mut self.arrived,
+            |a| needed(a.key),
+            |a| (a.key.distance(p, t) - range, a.texels.len() as u64 * 4),
+            step,
+            u64::MAX,
+        );
         let batch: Vec<CoverTile> = self.arrived.drain(..take).collect();
         for tile in batch {
             self.upload(gpu, &tile);

@@ -653,23 +653,19 @@ impl World {
         // 3. This frame inserts every arrived tile a pass sees, and others (the ring) nearest
         // first at the pace the eye's speed asks for, so a burst of arrivals (a ring row when
         // the eye enters a tile) is spread over the frames before the eye can reach it.
-        self.arrived.sort_by(|a, b| {
-            let key = |x: &TileTrees| (!visible.contains(&x.key), x.key.distance(eye, t));
-            let (ka, kb) = (key(a), key(b));
-            ka.0.cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
-        });
         let step = self.last_eye.map_or(0.0, |p| p.distance(eye));
         self.last_eye = Some(eye);
-        let seen_now = (self.arrived.iter())
-            .take_while(|a| visible.contains(&a.key))
-            .count();
-        let slack: Vec<(f32, u64)> = (self.arrived[seen_now..].iter())
-            .map(|a| {
-                let d = a.key.distance(eye, t) - (range + self.overhang);
-                (d, page_bytes(a.trees.len() as u32))
-            })
-            .collect();
-        let take = seen_now + ring_inserts(&slack, step, REST_BYTES);
+        let reach_now = range + self.overhang;
+        let take = due(
+            &mut self.arrived,
+            |a| visible.contains(&a.key),
+            |a| {
+                let slack = a.key.distance(eye, t) - reach_now;
+                (slack, page_bytes(a.trees.len() as u32))
+            },
+            step,
+            REST_BYTES,
+        );
         let incoming = (self.arrived[..take].iter())
             .map(|a| page_bytes(a.trees.len() as u32))
             .sum();
@@ -1052,6 +1048,29 @@ impl World {
         self.asking |= evicted > 0;
         evicted
     }
+}
+
+/// Orders `arrived` for this frame — those a pass `needed` now first, then the ring nearest
+/// first by the `slack` (how far the eye is from needing it, and its bytes) — and says how
+/// many of them to take: every one needed now, and the ring's at [`ring_inserts`]' pace.
+/// Shared by the world's tiles and the ground cover's.
+pub(crate) fn due<T>(
+    arrived: &mut [T],
+    needed: impl Fn(&T) -> bool,
+    slack: impl Fn(&T) -> (f32, u64),
+    step_m: f32,
+    rest_bytes: u64,
+) -> usize {
+    arrived.sort_by_cached_key(|a| (!needed(a), ordered(slack(a).0)));
+    let now = arrived.iter().take_while(|a| needed(a)).count();
+    let ring: Vec<(f32, u64)> = arrived[now..].iter().map(&slack).collect();
+    now + ring_inserts(&ring, step_m, rest_bytes)
+}
+
+/// An `f32` as a key that sorts as the number does (`total_cmp`'s order).
+fn ordered(x: f32) -> i32 {
+    let b = x.to_bits() as i32;
+    b ^ (((b >> 31) as u32) >> 1) as i32
 }
 
 /// How many of the prefetch ring's arrived tiles a frame inserts: `queue[i]` is how far the
