@@ -66,6 +66,8 @@ pub struct HbtParams {
     pub min_weight: f32,
     pub projection: hbt::HbtProjection,
     pub fixed_light: Option<[f32; 3]>,
+    pub lod_bias: f32,
+    pub shadow_margin: f32,
 }
 
 impl Default for HbtParams {
@@ -94,6 +96,8 @@ impl Default for HbtParams {
             min_weight: d.min_weight,
             projection: d.projection,
             fixed_light: d.fixed_light,
+            lod_bias: d.lod_bias,
+            shadow_margin: d.shadow_margin,
         }
     }
 }
@@ -130,6 +134,8 @@ impl HbtParams {
             min_weight: self.min_weight,
             projection: self.projection,
             fixed_light: self.fixed_light,
+            lod_bias: self.lod_bias,
+            shadow_margin: self.shadow_margin,
         }
     }
 

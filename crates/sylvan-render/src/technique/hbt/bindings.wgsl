@@ -26,8 +26,11 @@ struct HbtAtlas {
     // x: tile texels; y: tiles per row; z: tiles per layer; w: 1 for cross projection.
     tiles: vec4<u32>,
     // x: 1 / tiles per row; y: 1 / rows of tiles; z: 1 when received shadows come from the
-    // cascades instead of the cube-maps; w: unused.
+    // cascades instead of the cube-maps; w: the camera pass's mip bias.
     params: vec4<f32>,
+    // x: how far past its own caster's plane a billboard point takes its received shadow,
+    // in bounding radii; yzw: unused.
+    shading: vec4<f32>,
 };
 
 @group(1) @binding(0) var<storage, read> species_info: array<HbtSet>;

@@ -43,6 +43,8 @@ struct HbtOut {
     // (implicit derivatives are wrong along triangle edges on llvmpipe; see boxtree).
     @location(9) lod: f32,
     @location(10) @interpolate(flat) vis: vec4<u32>,
+    // The box centre in world space (where the object's own shadow caster stands).
+    @location(11) @interpolate(flat) centre: vec3<f32>,
 };
 
 fn hbt_to_world(p: vec3<f32>, in: HbtIn) -> vec3<f32> {
@@ -146,6 +148,7 @@ fn hbt_vertex(in: HbtIn, toward_world: vec3<f32>, view_proj: mat4x4<f32>, is_dir
     out.rows = rows;
     out.extra = in.extra;
     out.vis = in.vis;
+    out.centre = hbt_to_world(centre, in);
     // A texel is 2·half/tile metres of the image framing the box (≈ the quad's extent).
     let texel_m = 2.0 * max(dot(abs(u), h), dot(abs(v), h)) * in.extra.z / f32(atlas.tiles.x);
     var pixel_m = 0.0;
@@ -156,7 +159,8 @@ fn hbt_vertex(in: HbtIn, toward_world: vec3<f32>, view_proj: mat4x4<f32>, is_dir
     } else {
         pixel_m = distance(world, frame.camera.xyz) / max(frame.shadow_params.w, 1.0);
     }
-    out.lod = max(log2(pixel_m / max(texel_m, 1e-6)), 0.0);
+    let bias = select(atlas.params.w, 0.0, is_dir);
+    out.lod = max(log2(pixel_m / max(texel_m, 1e-6)) + bias, 0.0);
     return out;
 }
 
@@ -243,9 +247,13 @@ fn fs_hbt(in: HbtOut) -> @location(0) vec4<f32> {
     let sky_vis = corners8(in.vis.z, in.vis.w, q);
     var vis = corners8(in.vis.x, in.vis.y, q);
     if (atlas.params.z > 0.5) {
-        // Received shadow from the cascades, just outside the object towards the sun (its own
-        // shadowing is in the BTF).
-        vis = sun_visibility(in.world + frame.sun_dir.xyz * in.extra.w, vec3<f32>(0.0));
+        // Received shadow from the cascades (its own shadowing is in the BTF): the billboard
+        // point taken towards the sun just past the plane of the object's own caster (the
+        // sun-facing quad through its centre), so that its own caster does not shadow it
+        // again, while neighbours standing between it and the sun still do, point by point.
+        let l = frame.sun_dir.xyz;
+        let past = max(-dot(in.world - in.centre, l), 0.0) + atlas.shading.x * in.extra.w;
+        vis = sun_visibility(in.world + l * past, vec3<f32>(0.0));
     }
     let sky_color = mix(frame.sky_horizon.rgb, frame.sky_zenith.rgb, 0.5);
     // The sums are premultiplied by `direct.a`; rescale them to the output's opacity.

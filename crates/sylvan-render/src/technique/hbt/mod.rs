@@ -108,8 +108,14 @@
 //!   0.0516 against 0.0492 at 1280×720), so it is not the default.
 //! - **Received sun shadows come from the cascaded shadow maps by default**
 //!   ([`HbtShadows::Cascades`]), sampled once per fragment at the billboard point moved towards
-//!   the sun by the object's bounding radius (its own shadowing is in the BTF); the sky term
-//!   still comes from the cube-maps. MNP01's sun-from-cube-maps is [`HbtShadows::CubeMaps`]:
+//!   the sun just past the plane of the object's own caster (the sun-facing quad through its
+//!   centre) plus [`HbtDrawParams::shadow_margin`] bounding radii (its own shadowing is in the
+//!   BTF; neighbours between the point and the sun still shadow it point by point); the sky
+//!   term still comes from the cube-maps. Before, the point moved a whole bounding radius,
+//!   above a dense canopy for most of a crown (default scene against the 8192² reference:
+//!   ꟻLIP 0.0607 → 0.0593 with the margin alone).
+//! - **Camera mips are sampled one level finer** than the pixel footprint
+//!   ([`HbtDrawParams::lod_bias`], as `zfield`'s): 0.0607 → 0.0599 alone on the same view. MNP01's sun-from-cube-maps is [`HbtShadows::CubeMaps`]:
 //!   measured, its 8-corner interpolation spreads a neighbour's shadow over the whole crown and
 //!   under-darkens a tree in another's shadow (0.080 vs the reference's 0.289; cascades 0.301).
 //! - **Cube-maps are evaluated on the CPU** per texel from the occluders' baked coverage rather
@@ -205,8 +211,8 @@ pub enum HbtShadows {
     /// MNP01 §3.3/§4.2: the hierarchy of visibility cube-maps (other trees and terrain at the
     /// top level, other branches below), which also scale the sky term.
     CubeMaps,
-    /// The renderer's cascaded shadow maps, sampled outside the object towards the sun; the sky
-    /// term still comes from the cube-maps.
+    /// The renderer's cascaded shadow maps, sampled just past the object's own caster towards
+    /// the sun ([`HbtDrawParams::shadow_margin`]); the sky term still comes from the cube-maps.
     Cascades,
 }
 
@@ -466,6 +472,12 @@ pub struct HbtDrawParams {
     /// light) whatever the sun — a view-only impostor baked under one light, as octahedral
     /// impostors are. `None` (the default) follows the sun.
     pub fixed_light: Option<[f32; 3]>,
+    /// Mip bias of the camera pass (negative: sharper), −4 to 4.
+    pub lod_bias: f32,
+    /// ([`HbtShadows::Cascades`]) a billboard point takes its received sun shadow this far
+    /// (in the object's bounding radii) past the plane of its own shadow caster towards the
+    /// sun, 0 to 2.
+    pub shadow_margin: f32,
 }
 
 impl Default for HbtDrawParams {
@@ -498,6 +510,15 @@ impl Default for HbtDrawParams {
             min_weight: 0.05,
             projection: HbtProjection::Facing,
             fixed_light: None,
+            // Measured on the default scene at 640×360 against the 8192² reference (ꟻLIP,
+            // BENCHMARKS.md "hbt on the default scene against a converged reference"): with
+            // `shadow_margin` 0.3, 0.0607 → 0.0585; alone −1: 0.0599; eval/broadleaf 0.0934 →
+            // 0.0924, example 0.0703 → 0.0706 against their 2048² references.
+            lod_bias: -1.0,
+            // Measured there: 1 (about the point a radius out, as before) 0.0609, 0.3 0.0593,
+            // 0.1 0.0601, 0.02 0.0609 (too close: the object's own caster at its centre plane
+            // shadows it again through the 3×3 PCF).
+            shadow_margin: 0.3,
         }
     }
 }
@@ -559,6 +580,16 @@ impl ParamTable for HbtDrawParams {
             unit: "direction",
             doc: "baseline: reconstruct under this fixed light [x, y, z] whatever the sun (unset: follow the sun)",
         },
+        ParamDoc {
+            key: "lod_bias",
+            unit: "mips",
+            doc: "mip bias of the camera pass (negative: sharper; −4 to 4)",
+        },
+        ParamDoc {
+            key: "shadow_margin",
+            unit: "× radius",
+            doc: "(shadows cascades) a billboard point takes its received shadow this far past its own caster's plane towards the sun",
+        },
     ];
 
     fn validate(&self) -> Result<(), String> {
@@ -587,6 +618,15 @@ impl ParamTable for HbtDrawParams {
             return Err(format!(
                 "min_weight {}: must be at least 0 and below 0.5",
                 self.min_weight
+            ));
+        }
+        if !(self.lod_bias.is_finite() && (-4.0..=4.0).contains(&self.lod_bias)) {
+            return Err(format!("lod_bias {}: must be −4 to 4", self.lod_bias));
+        }
+        if !(self.shadow_margin.is_finite() && (0.0..=2.0).contains(&self.shadow_margin)) {
+            return Err(format!(
+                "shadow_margin {}: must be 0 to 2",
+                self.shadow_margin
             ));
         }
         if let Some(l) = self.fixed_light

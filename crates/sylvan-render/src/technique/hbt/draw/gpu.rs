@@ -37,6 +37,7 @@ pub(super) struct GpuSampleFrame {
 pub(super) struct GpuHbtAtlas {
     tiles: [u32; 4],
     params: [f32; 4],
+    shading: [f32; 4],
 }
 
 /// One billboard (a tree, or one object of an opened tree) as the `hbt` shader sees it
@@ -112,8 +113,9 @@ impl BillboardGpu {
                 1.0 / atlas.per_row as f32,
                 1.0 / atlas.rows as f32,
                 (params.shadows == HbtShadows::Cascades) as u32 as f32,
-                0.0,
+                params.lod_bias,
             ],
+            shading: [params.shadow_margin, 0.0, 0.0, 0.0],
         };
         let storage = |label, contents: &[u8]| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
