@@ -271,6 +271,14 @@ fn test() -> Result<(), String> {
         clippy,
         "cargo clippy --workspace --all-targets -- -D warnings",
     )?;
+    // Doc comments' links resolve (a renamed item leaves no dangling [`link`] behind).
+    let mut doc = cargo();
+    doc.args(["doc", "--workspace", "--no-deps", "--quiet"])
+        .env("RUSTDOCFLAGS", "-D warnings");
+    run(
+        doc,
+        "RUSTDOCFLAGS='-D warnings' cargo doc --workspace --no-deps",
+    )?;
     // One build serves every step: the test executables, and the CLI they drive (built with
     // the same features, so the run below and the GL pass rebuild nothing).
     let (binaries, cli) = build_tests()?;

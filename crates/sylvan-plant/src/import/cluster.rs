@@ -5,7 +5,7 @@
 //! The piece holding the lowest vertex is the trunk (root); every other piece hangs from the
 //! piece it comes closest to (its attachment point), and a breadth-first walk from the trunk
 //! turns those links into a tree. Leaves are the leaf mesh's blades — triangles joined across
-//! shared edges whose ends agree in position and texture coordinates ([`blades`]) — clustered
+//! shared edges whose ends agree in position and texture coordinates (`blades`) — clustered
 //! around the branch whose wood is nearest to their centre. When the wood is a single piece (merged
 //! meshes) the leaves are clustered spatially instead: recursive median splits along the
 //! longest axis, down to [`LEAVES_PER_CLUSTER`] leaves. Deviation: this is a heuristic, not a
@@ -220,7 +220,7 @@ impl Grid {
 }
 
 /// Builds the hierarchy and reorders the index buffers of `wood` and `leaves` to match.
-/// Returns the hierarchy and the number of leaves (blades, see [`blades`]).
+/// Returns the hierarchy and the number of leaves (blades, see `blades`).
 pub fn build(wood: &mut Mesh, leaves: &mut Mesh) -> (Hierarchy, usize) {
     let (wood_piece, nw) = pieces(wood);
     let (leaf_piece, nl) = blades(leaves);

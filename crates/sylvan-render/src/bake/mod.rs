@@ -443,7 +443,8 @@ pub struct BakeReport {
 pub trait Bake {
     /// The technique's name (the cache file names it).
     const NAME: &'static str;
-    /// Version of the payload; bump when [`Bake::encode`]'s output or the bake's result changes.
+    /// Version of the payload; bump when the asset's [`codec::Codec::encode`] output or the
+    /// bake's result changes.
     const FORMAT_VERSION: u32;
     /// Everything the bake depends on besides the plant.
     type Params: crate::technique::params::ParamTable;

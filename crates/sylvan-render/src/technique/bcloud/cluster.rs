@@ -1,7 +1,7 @@
 //! GPSS07 §4.1: the leaves of a plant clustered into a user-set number of planes, each plane
 //! a rectangle bounding the projection of its leaves (so the cloud bounds the shape, fig. 1).
 //!
-//! The clustering is the plane-space k-means of [GSSK05] with the error of [BCF05] folded in:
+//! The clustering is the plane-space k-means of \[GSSK05\] with the error of \[BCF05\] folded in:
 //! a leaf's cost on a plane is its squared distance from the plane (weighted [`NORMAL_WEIGHT`]
 //! times more than spread along it, so clusters come out thin and flat), its squared distance
 //! from the cluster's centre along the plane (so a plane's rectangle stays small: billboards

@@ -13,7 +13,7 @@
 //! and from every side, at a few MB per plant.
 //!
 //! - **Shader LOD** (§5.1, figs. 9–10): the entries walked are `entries_per_px` × the
-//!   projected diagonal of a hash cell in pixels ([LB06], from screen derivatives); when they
+//!   projected diagonal of a hash cell in pixels (\[LB06\], from screen derivatives); when they
 //!   run out before an opaque leaf the pixel takes the plane's low-resolution image (built from
 //!   the same lists at bake time), which is alpha-tested by a hashed threshold so partial
 //!   coverage stays partial on average. Below one entry only the low-resolution image is read.
@@ -33,7 +33,7 @@
 //!   bias `geometry`'s casters get), the far cloud with the low-resolution evaluation.
 //! - **Wood**: the plant's wood mesh, drawn like `geometry`'s, and for the far cloud a
 //!   simplified mesh holding only the branches of the first `far_wood_levels` levels (the
-//!   trunk and main limbs; GPSS07 uses progressive meshes [Hop96]).
+//!   trunk and main limbs; GPSS07 uses progressive meshes \[Hop96\]).
 //! - **Atlases**: all planes of all species share one plane table, one hash table, one list
 //!   buffer and one record buffer (GPSS07 §6's atlases, as storage buffers), and the
 //!   low-resolution tiles two texture atlases, so one species' cloud is one draw per pass.

@@ -336,7 +336,7 @@ impl Technique for BoxTree {
     }
 
     /// Per frame: each culled tree's box-tree traversal per pass — on the GPU from the
-    /// world's lists ([`GpuTraversal`]), or on the CPU from the frame's instances, sorted and
+    /// world's lists (`GpuTraversal`), or on the CPU from the frame's instances, sorted and
     /// uploaded.
     fn prepare_frame(
         &mut self,

@@ -6,7 +6,7 @@
 //!   branch);
 //! - §3.2.4 the volume-ratio threshold choosing which boxes get images ([`bake::select_boxes`]);
 //! - §3.2.2/§3.2.3 the images of each chosen box: orthographic, tightly framed, 64 or 128 px
-//!   ([`BoxTreeParams::tile`]), baked by the shared baker ([`crate::bake`]);
+//!   ([`BoxTreeBakeParams::tile`]), baked by the shared baker ([`crate::bake`]);
 //! - §4 (fig. 3) the axis-aligned cross and (fig. 6) the six diagonally aligned planes
 //!   ([`PlaneLayout`]); the default is the axis cross, which measured better overall: on the
 //!   default forest at 1280×720 it meets the fidelity target (ꟻLIP 0.0575 against 1-spp

@@ -415,7 +415,7 @@ impl Technique for Geometry {
         self.species.iter().map(SpeciesMeshes::bytes).sum()
     }
 
-    /// Per species its wood, then its leaves (the draws of [`Geometry::record_indirect`]).
+    /// Per species its wood, then its leaves (the draws of `Geometry::record_indirect`).
     fn indirect_draws(&self) -> Vec<IndirectDraw> {
         self.meshes()
             .map(|(species, _, mesh)| IndirectDraw::indexed(species as u32, mesh.index_count, 0))

@@ -217,7 +217,7 @@ pub struct BranchLevel {
 
 /// Chooses the level below the tree (MNP01 §3.2, §7): the distinct objects the root instances
 /// directly (leaves excluded) — the main branches — as at most `max_objects` representatives
-/// ([`representatives`]), and the root's own wood with the leaves it places directly, one
+/// (`representatives`), and the root's own wood with the leaves it places directly, one
 /// more object, the *rest*, placed at the identity.
 pub fn branch_level(plant: &Plant, max_objects: usize) -> BranchLevel {
     // Every branch instance of the root is cut off (deeper ones belong to them); the rest is
@@ -301,7 +301,7 @@ fn from_children(
 pub const SMALL_BRANCH_RATIO: f32 = 0.5;
 
 /// MNP01 §7's third level: the small branches of each main-branch object of `main` (at most
-/// `max_objects` representatives over the whole plant, [`representatives`]) placed in its
+/// `max_objects` representatives over the whole plant, `representatives`) placed in its
 /// frame, then its rest (its own wood and the leaves and branch parts above the cut). A main
 /// branch without small branches does not open (an empty range); nor does the plant's rest.
 pub fn small_level(plant: &Plant, main: &BranchLevel, max_objects: usize) -> BranchLevel {
