@@ -982,7 +982,7 @@ impl Renderer {
         Ok((drawn, terrain(0) + tris(0), shadow))
     }
 
-    /// The last rendered frame as an sRGB image.    /// The last rendered frame as an sRGB image.
+    /// The last rendered frame as an sRGB image.
     pub fn read_image(&self, gpu: &Gpu) -> Result<image::RgbaImage, RenderError> {
         let Some(t) = &self.targets else {
             return Err(RenderError::Option(
