@@ -114,8 +114,8 @@
 //!   term still comes from the cube-maps. Before, the point moved a whole bounding radius,
 //!   above a dense canopy for most of a crown (default scene against the 8192² reference:
 //!   ꟻLIP 0.0607 → 0.0593 with the margin alone).
-//! - **Camera mips are sampled one level finer** than the pixel footprint
-//!   ([`HbtDrawParams::lod_bias`], as `zfield`'s): 0.0607 → 0.0599 alone on the same view. MNP01's sun-from-cube-maps is [`HbtShadows::CubeMaps`]:
+//! - Camera mips at the pixel footprint; [`HbtDrawParams::lod_bias`] −1 (as `zfield`'s) is
+//!   0.0593 → 0.0585 on the same view for 2–4 % more frame time, so it is off. MNP01's sun-from-cube-maps is [`HbtShadows::CubeMaps`]:
 //!   measured, its 8-corner interpolation spreads a neighbour's shadow over the whole crown and
 //!   under-darkens a tree in another's shadow (0.080 vs the reference's 0.289; cascades 0.301).
 //! - **Cube-maps are evaluated on the CPU** per texel from the occluders' baked coverage rather
@@ -510,11 +510,11 @@ impl Default for HbtDrawParams {
             min_weight: 0.05,
             projection: HbtProjection::Facing,
             fixed_light: None,
-            // Measured on the default scene at 640×360 against the 8192² reference (ꟻLIP,
-            // BENCHMARKS.md "hbt on the default scene against a converged reference"): with
-            // `shadow_margin` 0.3, 0.0607 → 0.0585; alone −1: 0.0599; eval/broadleaf 0.0934 →
-            // 0.0924, example 0.0703 → 0.0706 against their 2048² references.
-            lod_bias: -1.0,
+            // Measured (BENCHMARKS.md, "hbt on the default scene against a converged
+            // reference"): −1 takes the default scene's ꟻLIP against the 8192² reference from
+            // 0.0593 to 0.0585 (with `shadow_margin` 0.3) and costs 2–4 % of the frame on
+            // example.toml, where #15's ≥ 5× bar is marginal: off.
+            lod_bias: 0.0,
             // Measured there: 1 (about the point a radius out, as before) 0.0609, 0.3 0.0593,
             // 0.1 0.0601, 0.02 0.0609 (too close: the object's own caster at its centre plane
             // shadows it again through the 3×3 PCF).
