@@ -1,7 +1,8 @@
 //! MNP01 §3.1/§3.3/§6.1: baking one plant's `hbt` asset — the tree's BTF (a lit,
 //! self-shadowed billboard per (view sample, light sample) and two ambient billboards per view
 //! sample), the levels below it with their BTFs and visibility cube-maps — and §4.1's
-//! reconstruction weights. This file is the entry ([`HbtBake`], its `bake`); the parts (private modules):
+//! reconstruction weights. This file is the entry ([`HbtBake`], its `bake`); the parts
+//! (private modules):
 //! - `asset`: the asset types ([`HbtBaked`], [`ObjectBtf`], [`Placement`], [`SmallLevel`])
 //!   and their codec;
 //! - `btf`: the BTF bake of one object (views, lights, self-shadowing, ambient), the view

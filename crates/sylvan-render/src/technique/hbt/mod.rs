@@ -113,11 +113,12 @@
 //!   BTF; neighbours between the point and the sun still shadow it point by point); the sky
 //!   term still comes from the cube-maps. Before, the point moved a whole bounding radius,
 //!   above a dense canopy for most of a crown (default scene against the 8192² reference:
-//!   ꟻLIP 0.0607 → 0.0593 with the margin alone).
+//!   ꟻLIP 0.0607 → 0.0593 with the margin alone). MNP01's sun-from-cube-maps is
+//!   [`HbtShadows::CubeMaps`]: measured, its 8-corner interpolation spreads a neighbour's
+//!   shadow over the whole crown and under-darkens a tree in another's shadow (0.080 vs the
+//!   reference's 0.289; cascades 0.301).
 //! - Camera mips at the pixel footprint; [`HbtDrawParams::lod_bias`] −1 (as `zfield`'s) is
-//!   0.0593 → 0.0585 on the same view for 2–4 % more frame time, so it is off. MNP01's sun-from-cube-maps is [`HbtShadows::CubeMaps`]:
-//!   measured, its 8-corner interpolation spreads a neighbour's shadow over the whole crown and
-//!   under-darkens a tree in another's shadow (0.080 vs the reference's 0.289; cascades 0.301).
+//!   0.0593 → 0.0585 on the same view for 2–4 % more frame time, so it is off.
 //! - **Cube-maps are evaluated on the CPU** per texel from the occluders' baked coverage rather
 //!   than rendered (§6.2); 8² per face by default (MNP01: 32², same ꟻLIP here at a quarter of
 //!   the memory and build time). Occluders: at most 48 nearest within 5 bounding radii.

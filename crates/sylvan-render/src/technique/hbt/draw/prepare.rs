@@ -383,7 +383,9 @@ impl Hbt {
     }
 
     /// MNP01 §3.3's top level: builds every placed tree's visibility cube-maps against the
-    /// other trees and `terrain` (with [`HbtShadows::CubeMaps`](crate::technique::hbt::HbtShadows::CubeMaps); otherwise nothing).
+    /// other trees and `terrain` (with
+    /// [`HbtShadows::CubeMaps`](crate::technique::hbt::HbtShadows::CubeMaps); otherwise
+    /// nothing).
     pub fn place(&mut self, instances: &Instances, terrain: Option<&Terrain>) {
         let trees: Vec<PlacedTree> = instances
             .placed_trees()
