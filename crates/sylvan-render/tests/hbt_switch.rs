@@ -97,6 +97,9 @@ fn levels_differ_less_at_the_switch_than_either_differs_from_the_reference() {
         light_level: 1,
         shadow_resolution: 128,
         band: 0.0,
+        // MNP01's three levels at their thresholds (measured, the pine's level below costs
+        // more than its meshes and is skipped: `a_level_below_dearer_than_the_meshes_is_skipped`).
+        measured_switch: false,
         ..Default::default()
     };
     let baked = HbtBake::bake(&gpu, &plant, &p.bake(), &mut |_, _| {}).expect("bake");
@@ -413,6 +416,7 @@ fn meshes_branch_by_branch(gpu: &sylvan_gpu::Gpu, plant: &sylvan_plant::Plant) {
         band: 0.0,
         // Opened at any distance: only the meshes' switch is under test.
         open_texel_pixels: 0.1,
+        measured_switch: false,
         ..Default::default()
     };
     let baked = HbtBake::bake(gpu, plant, &p.bake(), &mut |_, _| {}).expect("bake");
@@ -608,4 +612,45 @@ fn a_plant_without_main_branches_opens_into_its_meshes_where_they_were_measured_
         1.0,
         "the presets' thresholds open it into meshes there"
     );
+}
+
+/// #15, levels chosen from what they cost: the pine's level below (118 main-branch billboards)
+/// costs more than its 5.2k triangles where the tree opens, so it is dominated — the meshes are
+/// nearer the reference and cheaper — while the same level in front of meshes a hundred times
+/// heavier, or reduced to one placement, is not.
+#[test]
+fn a_level_below_dearer_than_the_meshes_is_skipped() {
+    let gpu = gpu();
+    let plant = sylvan_plant::preset("pine").unwrap();
+    let p = HbtParams {
+        view_level: 1,
+        light_level: 1,
+        shadow_resolution: 128,
+        ..Default::default()
+    };
+    let baked = HbtBake::bake(&gpu, &plant, &p.bake(), &mut |_, _| {}).expect("bake");
+    assert!(
+        baked.switch_curve().is_some(),
+        "a plant with main branches has its mesh switch measured too"
+    );
+    let triangles = plant.wood.triangle_count() + plant.leaves.triangle_count();
+    let costs = sylvan_render::technique::hbt::LevelCosts::LAVAPIPE;
+    let fill = baked.branch_fill();
+    assert!(
+        (1.0..20.0).contains(&fill),
+        "the main branches' billboards cover the tree's {fill:.2} times"
+    );
+    let (below, meshes) = costs.at_opening(&baked, triangles, p.open_texel_pixels);
+    eprintln!("pine at its opening: level below {below:.0} µs, meshes {meshes:.0} µs");
+    assert!(costs.below_costs_more(&baked, triangles, p.open_texel_pixels));
+    assert!(!costs.below_costs_more(&baked, triangles * 100, p.open_texel_pixels));
+    let mut one = baked.clone();
+    one.placements.truncate(1);
+    assert!(
+        !costs.below_costs_more(&one, triangles * 10, p.open_texel_pixels),
+        "one placement costs less than meshes ten times the pine's"
+    );
+    // The fill grows with the opening size; the meshes' triangles do not.
+    let (below_far, _) = costs.at_opening(&baked, triangles, 1.0);
+    assert!(below_far < below);
 }

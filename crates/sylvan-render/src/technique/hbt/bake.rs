@@ -90,6 +90,7 @@ impl crate::bake::Bake for HbtBake {
         put("lights", b.lights().into());
         put("branch_objects", b.objects.len().into());
         put("branch_placements", b.placements.len().into());
+        put("branch_fill", (b.branch_fill() as f64).into());
         if let Some(c) = b.switch_curve() {
             put(
                 "mesh_switch_texel_px",
@@ -253,17 +254,12 @@ impl crate::bake::Bake for HbtBake {
             progress(total, total);
         }
         // Where, at this tile size, the meshes get closer to the reference than the billboard
-        // (#15: the mesh switch of a plant without main branches, measured in ꟻLIP, not
-        // assumed).
-        // Only a plant without main branches uses it (2–5 s a plant).
+        // (#15: the mesh switch measured in ꟻLIP, not assumed): used by a plant without main
+        // branches, and by one whose level below costs more than its meshes
+        // (`select::LevelCosts`). 2–5 s a plant.
         let (lo, hi) = (Vec3::from(plant.bbox_min), Vec3::from(plant.bbox_max));
-        let switch_error = match objects.iter().all(|o| o.object == REST_OBJECT) {
-            true => {
-                let c = switch::measure(gpu, plant, p.tile, |d| view_frame(d, lo, hi, p.tile))?;
-                [c.billboard, c.meshes]
-            }
-            false => [Vec::new(), Vec::new()],
-        };
+        let c = switch::measure(gpu, plant, p.tile, |d| view_frame(d, lo, hi, p.tile))?;
+        let switch_error = [c.billboard, c.meshes];
         Ok(HbtBaked {
             tile: p.tile,
             view_level: p.view_level,

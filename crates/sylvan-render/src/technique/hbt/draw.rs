@@ -12,6 +12,8 @@ pub(crate) use gpu_frame::select_source;
 mod prepare;
 mod select;
 
+pub use select::LevelCosts;
+
 use super::bake as hb;
 use super::scene::{PlacedTree, SceneVisibility};
 use super::{HbtDrawParams, HbtProjection, HbtShadows};
@@ -85,6 +87,9 @@ pub struct Hbt {
     meshed: u32,
     branches_opened: u32,
     branches_meshed: u32,
+    /// Plants whose level below was skipped as dearer than their meshes
+    /// ([`select::LevelCosts`]).
+    levels_below_skipped: usize,
 }
 
 impl Hbt {
@@ -475,6 +480,10 @@ impl Technique for Hbt {
             let (opened, meshed) = f.opened_meshed();
             return vec![
                 ("visibility_bytes", self.visibility_bytes() as f64),
+                (
+                    "plants_without_branch_level",
+                    self.levels_below_skipped as f64,
+                ),
                 ("trees_opened", opened as f64),
                 ("trees_meshed", meshed as f64),
                 // Neither opens on the GPU-driven frame (no small branches, no per-branch
@@ -489,6 +498,10 @@ impl Technique for Hbt {
         vec![
             ("visibility_bytes", self.visibility_bytes() as f64),
             ("visibility_ms", self.visibility_build_ms()),
+            (
+                "plants_without_branch_level",
+                self.levels_below_skipped as f64,
+            ),
             ("trees_opened", self.opened as f64),
             ("trees_meshed", self.meshed as f64),
             ("branches_opened", self.branches_opened as f64),

@@ -75,7 +75,8 @@
 //!   slower (overlapping billboards, 12 fetches per fragment) and further from the reference
 //!   than the meshes (ꟻLIP 0.094 with the BTF levels only, 0.044 with meshes; BENCHMARKS.md).
 //!   With the pine the branch level is then drawn only within the cross-fades (the prunus,
-//!   whose branches are smaller against the tree, keeps a band of its own).
+//!   whose branches are smaller against the tree, keeps a band of its own) — with
+//!   `measured_switch` off: by default the presets skip it as dearer than their meshes (below).
 //! - **A plant without main branches opens into its meshes where measured.** MNP01 opens
 //!   levels where the billboard would be magnified; a plant whose level below is its rest
 //!   alone (an imported mesh: no L-system branches) has nothing between its tree billboard and
@@ -83,8 +84,21 @@
 //!   meshed every tree of an imported broadleaf. The bake measures ([`bake::switch`]) how far
 //!   the billboard and one-sample meshes each are from a 4×4-sampled rasterisation in ꟻLIP
 //!   (albedo over a dark ground) at 16–256 px, and the meshes open where they become closer
-//!   ([`HbtDrawParams::measured_switch`], default on; plants with main branches keep the
-//!   thresholds measured on the presets).
+//!   ([`HbtDrawParams::measured_switch`], default on).
+//! - **A level below that costs more than the meshes is skipped** (a deviation from MNP01,
+//!   whose three levels are fixed; #15: levels chosen from what they cost). Where the tree
+//!   opens, the level below costs its billboards plus their fill (the bake's
+//!   [`HbtBaked::branch_fill`]: how many times their quads cover the tree's, 1.9–5.9 on the
+//!   presets) and the meshes their triangles ([`LevelCosts`], per-billboard, per-fragment and
+//!   per-triangle costs fitted on lavapipe). Where the level below is dearer, the meshes —
+//!   nearer the reference — dominate it, and the plant goes from its billboard to its meshes
+//!   at the earlier of the measured crossing and the branch switch. On lavapipe every preset's
+//!   level below is dearer (the chestnut's 1,458 branch billboards cost 45 ms where its
+//!   182k triangles cost 26, the pine's 118 cost 6.1 ms where its 5.2k triangles cost 2.7,
+//!   each alone at ≈ 90 px): measured on `eval/broadleaf.toml` and `example.toml` at
+//!   640×360 the frame is faster for an equal or lower ꟻLIP (BENCHMARKS.md, "the level below
+//!   against the meshes"). A GPU whose fragments are cheaper against its triangles keeps the
+//!   level where the constants say so; they are lavapipe's until measured there.
 //! - **A tree opens into its meshes as a whole by default.** Branch by branch
 //!   ([`HbtDrawParams::mesh_per_branch`], `--set hbt.mesh_per_branch=true`) is built: each triangle of the
 //!   plant's own meshes is given to the root instance whose expansion has a triangle with the
@@ -151,8 +165,8 @@
 //!   are CPU-driven only (`--cpu-driven`; refused in one line otherwise).
 //!
 //! Cost: bake = V + L rasterisations plus a CPU lighting pass of V·L·(tile·ss)² samples per
-//! object, plus the branch cube-maps (and, for a plant without main branches, the measured mesh
-//! switch: 19 rasterisations of 4 views and 72 ꟻLIP evaluations, 2–5 s); per frame, 2
+//! object, plus the branch cube-maps and the measured mesh switch (19 rasterisations of 4 views
+//! and 72 ꟻLIP evaluations, 2–12 s: 18 s for the chestnut's bake in all); per frame, 2
 //! direction look-ups per billboard (CPU) and
 //! 8 cube-map look-ups per opened branch, one instanced draw per pass, up to 9 + 3 texture
 //! fetches per fragment; meshes as `geometry`. Memory (default, per plant): tree BTF 66 × 18 at
@@ -170,7 +184,7 @@ pub mod scene;
 pub mod visibility;
 
 pub use bake::{HbtBake, HbtBaked, reconstruction_weights};
-pub use draw::Hbt;
+pub use draw::{Hbt, LevelCosts};
 pub use entry::ENTRY;
 
 use super::params::{self, ParamDoc, ParamTable};
@@ -455,6 +469,11 @@ pub struct HbtDrawParams {
     /// billboard (`sylvan bake --technique hbt --json`: `mesh_switch_texel_px`); off, it opens
     /// into its rest at [`HbtDrawParams::open_texel_pixels`] and its meshes at
     /// [`HbtDrawParams::mesh_texel_pixels`] of the rest's texel, thresholds tuned on the presets.
+    /// On, a plant whose level below costs more than its meshes where the tree opens
+    /// ([`LevelCosts`]: its billboards and their fill against its triangles) skips that level
+    /// the same way, its meshes opening at the earlier of the measured crossing and the branch
+    /// switch (`plants_without_branch_level` in the statistics); not with
+    /// [`HbtDrawParams::mesh_per_branch`].
     pub measured_switch: bool,
     /// The cross-fade band around those switches, relative (0 = hard switch).
     pub band: f32,
@@ -549,7 +568,7 @@ impl ParamTable for HbtDrawParams {
         ParamDoc {
             key: "measured_switch",
             unit: "",
-            doc: "(levels 3) a plant without main branches opens into its meshes where they get closer to the reference than its billboard, measured at bake time",
+            doc: "(levels 3) a plant without main branches, or whose branch level costs more than its meshes, opens from its billboard into its meshes where they get closer to the reference, measured at bake time",
         },
         ParamDoc {
             key: "band",

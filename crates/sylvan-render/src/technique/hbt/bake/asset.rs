@@ -7,9 +7,19 @@ use crate::technique::hbt::visibility;
 use glam::{Affine3A, Vec3};
 
 /// Bumped whenever the payload below or the lighting baked into it changes.
-pub const FORMAT_VERSION: u32 = 6;
+pub const FORMAT_VERSION: u32 = 7;
 /// Largest visibility cube-map face side accepted.
 pub const MAX_CUBE_RESOLUTION: u32 = 64;
+
+/// Half-sides of the facing quad `hbt.wgsl` (`hbt_vertex`) draws for a box of half-extents `h`
+/// seen along the unit direction `f` (model frame): the box projected on the quad's axes,
+/// 10 % wider.
+pub fn facing_quad_half(h: Vec3, f: Vec3) -> (f32, f32) {
+    let up = if f.y.abs() < 0.99 { Vec3::Y } else { Vec3::Z };
+    let v = (up - f * up.dot(f)).normalize_or_zero();
+    let u = v.cross(f);
+    (u.abs().dot(h) * 1.1, v.abs().dot(h) * 1.1)
+}
 
 /// One image as uploaded: its mip chain, each level `size² × 4` bytes of sRGB premultiplied
 /// RGBA8 (level 0 is `tile²`).
@@ -120,7 +130,8 @@ pub struct HbtBaked {
     pub small: SmallLevel,
     /// The tree billboard's and the one-sample meshes' ꟻLIP against the reference at each of
     /// [`super::switch::SIZES`] ([`super::switch::measure`]): where the meshes open on a plant
-    /// without main branches (empty for a plant with main branches: not used, not measured).
+    /// without main branches, or whose level below costs more than its meshes (empty in a
+    /// decoded asset that was not measured: the thresholds apply).
     pub switch_error: [Vec<f32>; 2],
 }
 
@@ -130,8 +141,8 @@ impl HbtBaked {
         crate::directions::SAMPLE_COUNTS[self.view_level as usize]
     }
 
-    /// The measured mesh switch ([`HbtBaked::switch_error`]) as a curve; `None` for a plant
-    /// with main branches (not measured: their thresholds apply).
+    /// The measured mesh switch ([`HbtBaked::switch_error`]) as a curve; `None` where it was
+    /// not measured (the thresholds apply).
     pub fn switch_curve(&self) -> Option<super::switch::SwitchCurve> {
         (!self.switch_error[0].is_empty()).then(|| super::switch::SwitchCurve {
             sizes: super::switch::SIZES.to_vec(),
@@ -139,6 +150,52 @@ impl HbtBaked {
             meshes: self.switch_error[1].clone(),
             tile: self.tile,
         })
+    }
+
+    /// The level below's fill against the tree billboard's: the mean, over the switch's view
+    /// directions ([`super::switch::VIEWS`]), of the area of every placement's facing quad (its
+    /// object's box projected along the view, as `hbt.wgsl` draws it) over the area of the tree's
+    /// quad — how many BTF fragments the opened tree shades per fragment of the closed one
+    /// (#15: what the level costs). 0 without a level below.
+    pub fn branch_fill(&self) -> f32 {
+        let tree = (Vec3::from(self.bbox_max) - Vec3::from(self.bbox_min)) * 0.5;
+        let views = super::switch::VIEWS.map(|d| Vec3::from(d).normalize());
+        let mut sum = 0.0;
+        for f in views {
+            let (hu, hv) = facing_quad_half(tree, f);
+            let mut below = 0.0;
+            for pl in &self.placements {
+                let Some(o) = self.objects.get(pl.object as usize) else {
+                    continue;
+                };
+                let m = pl.affine().matrix3;
+                let scale = m.x_axis.length();
+                let dir = (m.transpose() * f).normalize_or_zero();
+                let h = (Vec3::from(o.bbox_max) - Vec3::from(o.bbox_min)) * 0.5;
+                let (u, v) = facing_quad_half(h, dir);
+                below += u * v * scale * scale;
+            }
+            sum += below / (hu * hv).max(1e-12);
+        }
+        sum / views.len() as f32
+    }
+
+    /// Pixels the tree's facing quad covers where one of its texels covers `texel_px` pixels
+    /// (mean over [`super::switch::VIEWS`]; the texel as `hbt.wgsl` sizes it, the quad's larger
+    /// half-side over half the tile).
+    pub fn tree_pixels(&self, texel_px: f32) -> f32 {
+        let tree = (Vec3::from(self.bbox_max) - Vec3::from(self.bbox_min)) * 0.5;
+        let views = super::switch::VIEWS.map(|d| Vec3::from(d).normalize());
+        let tile = self.tile as f32;
+        let px: f32 = views
+            .iter()
+            .map(|&f| {
+                let (hu, hv) = facing_quad_half(tree, f);
+                let texel = 2.0 * hu.max(hv) / 1.1 / tile;
+                4.0 * hu * hv / (texel * texel).max(1e-12)
+            })
+            .sum();
+        px / views.len() as f32 * texel_px * texel_px
     }
 
     /// Light samples.

@@ -20,7 +20,7 @@ pub const SIZES: [u32; 9] = [16, 24, 32, 48, 64, 96, 128, 192, 256];
 
 /// View directions measured (from the plant towards the eye): the side, three-quarters up,
 /// and steeply from above.
-const VIEWS: [[f32; 3]; 4] = [
+pub const VIEWS: [[f32; 3]; 4] = [
     [1.0, 0.05, 0.0],
     [0.0, 0.05, 1.0],
     [-0.7, 0.5, 0.5],

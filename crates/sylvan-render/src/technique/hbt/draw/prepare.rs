@@ -182,6 +182,7 @@ impl Hbt {
         let mut plant_draws: Vec<PlantDraw> = Vec::new();
         let mut species_plant = Vec::with_capacity(plants.len());
         let mesh_pipes = (params.levels >= 3).then(|| MeshPipelines::new(gpu, frame));
+        let mut skipped = 0;
         for (plant, b) in plants.iter().zip(baked) {
             let matches = b.tile == tile
                 && b.view_level == bake.view_level
@@ -278,7 +279,21 @@ impl Hbt {
             // mesh) has nothing between its tree billboard and its meshes; they open where
             // they were measured to get closer to the reference than the billboard (#15).
             let rest_only = b.objects.iter().all(|o| o.object == hb::REST_OBJECT);
-            let measured = params.measured_switch && rest_only && params.levels >= 3;
+            // A level below that costs more than the plant's meshes where the tree opens is
+            // dominated (the meshes are nearer the reference and cheaper): the plant goes
+            // from its billboard to its meshes at the measured crossing, as a plant without
+            // main branches does (#15: levels chosen from what they cost).
+            let triangles = plant.wood.triangle_count() + plant.leaves.triangle_count();
+            let dominated = !rest_only
+                && !params.mesh_per_branch
+                && b.switch_curve().is_some()
+                && select::LevelCosts::LAVAPIPE.below_costs_more(
+                    b,
+                    triangles,
+                    params.open_texel_pixels,
+                );
+            let measured = params.measured_switch && (rest_only || dominated) && params.levels >= 3;
+            skipped += usize::from(measured && dominated);
             if measured {
                 placements.clear();
             }
@@ -287,6 +302,12 @@ impl Hbt {
                 false => (b.tree_texel(), b.mesh_texel()),
             };
             let mesh_pixels = match b.switch_curve().filter(|_| measured) {
+                // Without its level below, a plant's meshes open no later than they did below
+                // it (the billboard is coarser than the level it replaces): the earlier of the
+                // crossing and the branch switch, in tree texels.
+                Some(c) if dominated => c
+                    .crossing_texel_pixels()
+                    .min(b.tree_texel() / b.mesh_texel() * params.mesh_texel_pixels),
                 Some(c) => c.crossing_texel_pixels(),
                 None => select::mesh_pixels(params, !placements.is_empty()),
             };
@@ -379,6 +400,7 @@ impl Hbt {
             meshed: 0,
             branches_opened: 0,
             branches_meshed: 0,
+            levels_below_skipped: skipped,
         })
     }
 

@@ -59,6 +59,63 @@ pub fn mesh_pixels(p: &HbtDrawParams, has_below: bool) -> f32 {
     }
 }
 
+/// What one tree's levels cost to draw, in microseconds of GPU time (#15: levels chosen per
+/// plant from what they cost, not only from where they are magnified). Measured on lavapipe
+/// (the 2-core VM of BENCHMARKS.md, "`hbt`: the level below against the meshes"): one
+/// chestnut and one pine alone at 256² and 512², the trees pass with the tree level, the level
+/// below and the meshes each forced, fitted per billboard, per shaded fragment and per
+/// triangle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LevelCosts {
+    /// One billboard of the level below, whatever its size (vertex work, set-up, its
+    /// visibility interpolation).
+    pub billboard_us: f32,
+    /// One fragment of the level below's billboards (BTF look-ups, cube-map visibility).
+    pub branch_fragment_us: f32,
+    /// One triangle of the plant's meshes.
+    pub triangle_us: f32,
+    /// One fragment of the tree's own area drawn as meshes.
+    pub mesh_fragment_us: f32,
+}
+
+impl LevelCosts {
+    /// lavapipe's (chestnut: 16 µs a billboard and 0.69 µs a fragment of its level below,
+    /// pine: 19 and 0.29; meshes 0.14 µs a triangle and 0.13 a fragment).
+    pub const LAVAPIPE: LevelCosts = LevelCosts {
+        billboard_us: 17.0,
+        branch_fragment_us: 0.5,
+        triangle_us: 0.14,
+        mesh_fragment_us: 0.13,
+    };
+
+    /// The level below's cost and the meshes' for one tree of `b` (`triangles` in its meshes)
+    /// where it opens (`open_texel_pixels` pixels per tree texel).
+    pub fn at_opening(
+        &self,
+        b: &crate::technique::hbt::bake::HbtBaked,
+        triangles: usize,
+        open_texel_pixels: f32,
+    ) -> (f32, f32) {
+        let pixels = b.tree_pixels(open_texel_pixels);
+        let below = self.billboard_us * b.placements.len() as f32
+            + self.branch_fragment_us * b.branch_fill() * pixels;
+        let meshes = self.triangle_us * triangles as f32 + self.mesh_fragment_us * pixels;
+        (below, meshes)
+    }
+
+    /// Whether `b`'s level below costs at least as much as its meshes where the tree opens:
+    /// then the level is dominated — the meshes are closer to the reference, and no dearer.
+    pub fn below_costs_more(
+        &self,
+        b: &crate::technique::hbt::bake::HbtBaked,
+        triangles: usize,
+        open_texel_pixels: f32,
+    ) -> bool {
+        let (below, meshes) = self.at_opening(b, triangles, open_texel_pixels);
+        below >= meshes
+    }
+}
+
 /// What the selection needs of one plant: its baked texel sizes and its two switches.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PlantLod {
