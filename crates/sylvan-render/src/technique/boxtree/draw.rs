@@ -620,19 +620,10 @@ impl BoxTree {
                     continue;
                 }
                 pass.set_vertex_buffer(1, t.out_res.slice(..));
-                for (b, bx) in sp.boxes.iter().enumerate() {
-                    let range = if is_wood {
-                        &bx.residual_wood
-                    } else {
-                        &bx.residual_leaves
-                    };
-                    if range.is_empty() {
-                        continue;
-                    }
-                    let (args, offset) = t.residual_args(p, sp.box_base + b as u32, !is_wood);
-                    pass.draw_indexed_indirect(args, offset);
-                    counts.draw_calls += 1;
-                }
+                // One multi-draw for the species' opened boxes (#15).
+                let (args, first, draws) = t.residual_run(p, s, !is_wood);
+                pass.multi_draw_indexed_indirect(args, first, draws);
+                counts.draw_calls += 1;
             }
         }
         pass.set_pipeline(if shadow {

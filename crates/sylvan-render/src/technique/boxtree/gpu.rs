@@ -30,6 +30,16 @@ const IMP_SEGS: u32 = BUCKETS + CASCADES as u32;
 const C_SEG: u32 = 328;
 const A_IMP: u64 = 12;
 const A_RES: u64 = 32;
+
+/// The multi-draw runs' first word in the dispatch buffer (after three workgroup counts).
+const D_MDI: u64 = 9;
+
+/// Words of the dispatch buffer: three workgroup counts, then per (pass, mesh) the opened
+/// boxes' draws compacted in species runs (traverse.wgsl, `scan_segments`).
+fn dispatch_words(boxes: u32) -> u64 {
+    D_MDI + 10 * PASSES as u64 * boxes as u64
+}
+
 /// Nearest bucketed distance and the farthest, for the camera's sort (metres).
 const SORT_NEAR_M: f32 = 0.5;
 const SORT_FAR_M: f32 = 1e5;
@@ -89,6 +99,10 @@ pub(super) struct GpuTraversal {
     /// (made again when one of them, or a list of ours, was replaced).
     bind: Option<(wgpu::BindGroup, wgpu::Buffer, wgpu::Buffer)>,
     boxes: u32,
+    /// Per species, its global boxes `[box_base, box_base + n)` (its multi-draw runs).
+    species_boxes: Vec<(u32, u32)>,
+    /// First row of those runs in the tables.
+    runs_row: u32,
     vertices: u32,
     readback: LateReadback,
     counts: Counts,
@@ -161,7 +175,14 @@ impl GpuTraversal {
                 immediate_size: 0,
             }),
         ];
-        let dispatch = storage(gpu, "boxtree_dispatch", wgpu::BufferUsages::INDIRECT, 36);
+        // Three workgroup counts (x, y, z), then the multi-draw runs: the opened boxes' draws
+        // compacted per (pass, mesh, species) (traverse.wgsl `D_MDI`).
+        let dispatch = storage(
+            gpu,
+            "boxtree_dispatch",
+            wgpu::BufferUsages::INDIRECT,
+            dispatch_words(boxes) * 4,
+        );
         let dispatch_bind = crate::technique::common::bind_group(
             gpu,
             "boxtree_dispatch_bind",
@@ -182,6 +203,13 @@ impl GpuTraversal {
         let counter_words = (C_SEG + 2 * segs) as u64;
         let mut tables_rows = rows;
         tables_rows.extend(box_rows);
+        // The species' box runs (first global box, boxes), after the boxes' rows.
+        let runs_row = tables_rows.len() as u32;
+        let species_boxes: Vec<(u32, u32)> = species
+            .iter()
+            .map(|s| (s.box_base, s.boxes.len() as u32))
+            .collect();
+        tables_rows.extend(species_boxes.iter().map(|&(b, n)| [b, n, 0, 0]));
         // Placeholder buffers: capacity 0 until the first frame sizes the lists.
         let caps = [0u32, 0];
         let (parked_imp, out_imp) =
@@ -226,6 +254,8 @@ impl GpuTraversal {
             caps,
             bind: None,
             boxes,
+            species_boxes,
+            runs_row,
             vertices,
             readback: LateReadback::new(gpu, (C_SEG + segs) as u64 * 4),
             counts: Counts::default(),
@@ -317,7 +347,12 @@ impl GpuTraversal {
             eye_band: input.eye.extend(band).to_array(),
             views,
             info: [n as u32, 0, self.boxes, self.vertices],
-            caps: [self.caps[0], self.caps[1], 0, 0],
+            caps: [
+                self.caps[0],
+                self.caps[1],
+                self.runs_row,
+                self.species_boxes.len() as u32,
+            ],
             sort: [
                 SORT_NEAR_M,
                 BUCKETS as f32 / (SORT_FAR_M / SORT_NEAR_M).log2(),
@@ -386,9 +421,9 @@ impl GpuTraversal {
         Ok(())
     }
 
-    /// The first row of the per-box tables.
+    /// The first row of the per-box tables (the species' runs follow them).
     fn box_row(&self) -> u32 {
-        (self.tables.size() / 16) as u32 - 2 * self.boxes
+        self.runs_row - 2 * self.boxes
     }
 
     /// After the frame's submission completed: reads this frame's counts (waiting if needed)
@@ -456,11 +491,14 @@ impl GpuTraversal {
         (&self.args, (A_IMP + 4 * pass as u64) * 4)
     }
 
-    /// The indirect arguments and the byte offset of the draw of global box `gbox`'s residual
-    /// wood (`leaves` false) or leaves in `pass`.
-    pub fn residual_args(&self, pass: usize, gbox: u32, leaves: bool) -> (&wgpu::Buffer, u64) {
-        let seg = pass as u64 * self.boxes as u64 + gbox as u64;
-        (&self.args, (A_RES + 5 * (2 * seg + leaves as u64)) * 4)
+    /// The draws of species `s`'s opened boxes in `pass` for its wood or `leaves`, compacted on
+    /// the GPU (those of boxes no tree opened are at the run's end and draw nothing) — (buffer,
+    /// offset of the first, draws): one `multi_draw_indexed_indirect` (#15: one indirect draw
+    /// per (species, mesh, pass) instead of one per box).
+    pub fn residual_run(&self, pass: usize, s: usize, leaves: bool) -> (&wgpu::Buffer, u64, u32) {
+        let (base, n) = self.species_boxes[s];
+        let run = (pass as u64 * 2 + leaves as u64) * self.boxes as u64 + base as u64;
+        (&self.dispatch, (D_MDI + 5 * run) * 4, n)
     }
 
     /// Impostors drawn in `pass` in the last frame read back.

@@ -40,11 +40,13 @@
 //! passes over the world cull's lists (`gpu.rs`, `traverse.wgsl`: one invocation per listed
 //! tree and pass walks its box tree in pre-order; impostors and opened boxes are counted into
 //! segments — the camera's impostors by distance bucket, far first — and scattered into
-//! compacted lists with their indirect draw arguments): the CPU records per (pass, species)
-//! and box, never per tree. With `--cpu-driven` the same traversal runs on the CPU
-//! ([`traverse`]) for every culled tree per pass. Either way: impostors of all trees and
-//! species in one instanced draw per pass (sorted back to front in the main pass); residual
-//! geometry one instanced draw per (species, opened box) for wood and for leaves.
+//! compacted lists with their indirect draw arguments; the opened boxes' draws compacted per
+//! (pass, mesh, species) so that one `multi_draw_indexed_indirect` draws a species' opened
+//! boxes): the CPU records per (pass, species), never per box or tree. With `--cpu-driven` the
+//! same traversal runs on the CPU ([`traverse`]) for every culled tree per pass, and the
+//! residual geometry is one instanced draw per (species, opened box) for wood and for leaves.
+//! Either way: impostors of all trees and species in one instanced draw per pass (sorted back
+//! to front in the main pass).
 //! Limits: at most [`MAX_BOXES`] boxes per plant; the atlas must fit the device's texture
 //! size and array-layer limits (checked before allocating).
 

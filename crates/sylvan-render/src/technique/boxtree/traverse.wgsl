@@ -43,7 +43,8 @@ struct Params {
     views: array<vec4<f32>, 5>,
     // x input lists, y first box row in `tables`, z boxes in all, w impostor vertices per box
     info: vec4<u32>,
-    // x impostor capacity, y residual capacity
+    // x impostor capacity, y residual capacity, z first row of the species' box runs (first
+    // global box, boxes) in `tables`, w species
     caps: vec4<u32>,
     // x nearest bucketed distance, y buckets per log2 of distance
     sort: vec4<f32>,
@@ -58,9 +59,12 @@ const C_LIST: u32 = 4u;
 const C_SEG: u32 = 328u;
 const MAX_DEPTH: u32 = 64u;
 const SNAP: f32 = 0.02;
-// args: impostor draws at 12 + 4 p; residual draws at 32 + 5 k
+// args: impostor draws at 12 + 4 p; residual draws at 32 + 5 k (k = 2 (pass · boxes + box) +
+// mesh); then those of opened boxes compacted per (pass, mesh, species)
 const A_IMP: u32 = 12u;
 const A_RES: u32 = 32u;
+// dispatch: the multi-draw runs (gpu.rs `D_MDI`) after the three workgroup counts
+const D_MDI: u32 = 9u;
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> trees: array<Tree>;
@@ -274,6 +278,33 @@ fn scan_segments(@builtin(local_invocation_index) li: u32) {
             args[at + 2u] = ranges[2u * m];
             args[at + 3u] = 0u;
             args[at + 4u] = r.y;
+        }
+    }
+    // Multi-draw runs (gpu.rs `residual_run`): per (pass, mesh, species) the draws of its
+    // opened boxes, in box order, compacted into `dispatch` after the workgroup counts, the
+    // rest of the run emptied.
+    storageBarrier();
+    let species = params.caps.w;
+    for (var k = li; k < 10u * species; k += 256u) {
+        let pm = k / species; // pass · 2 + mesh
+        let run = tables[params.caps.z + k % species];
+        var n = 0u;
+        for (var b = 0u; b < run.y; b++) {
+            let src = A_RES + 5u * (2u * ((pm / 2u) * boxes + run.x + b) + pm % 2u);
+            if (args[src] > 0u && args[src + 1u] > 0u) {
+                let dst = D_MDI + 5u * (pm * boxes + run.x + n);
+                for (var w = 0u; w < 5u; w++) {
+                    dispatch[dst + w] = args[src + w];
+                }
+                n++;
+            }
+        }
+        // The run's tail draws nothing (the multi-draw walks the whole run).
+        for (var b = n; b < run.y; b++) {
+            let dst = D_MDI + 5u * (pm * boxes + run.x + b);
+            for (var w = 0u; w < 5u; w++) {
+                dispatch[dst + w] = 0u;
+            }
         }
     }
     if (li == 0u) {
