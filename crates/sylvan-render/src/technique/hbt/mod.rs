@@ -92,7 +92,8 @@
 //!   presets) and the meshes their triangles ([`LevelCosts`], per-billboard, per-fragment and
 //!   per-triangle costs fitted on lavapipe). Where the level below is dearer, the meshes —
 //!   nearer the reference — dominate it, and the plant goes from its billboard to its meshes
-//!   at the earlier of the measured crossing and the branch switch. On lavapipe every preset's
+//!   at the earlier of the measured crossing and the branch switch; the skipped level's BTFs
+//!   and cube-maps are not uploaded (a plant without main branches likewise). On lavapipe every preset's
 //!   level below is dearer (the chestnut's 1,458 branch billboards cost 45 ms where its
 //!   182k triangles cost 26, the pine's 118 cost 6.1 ms where its 5.2k triangles cost 2.7,
 //!   each alone at ≈ 90 px): measured on `eval/broadleaf.toml` and `example.toml` at

@@ -218,10 +218,27 @@ impl Hbt {
                 tiles: &mut tiles,
                 tile,
             };
+            let rest_only = b.objects.iter().all(|o| o.object == hb::REST_OBJECT);
+            // A level below that costs more than the plant's meshes where the tree opens is
+            // dominated (the meshes are nearer the reference and cheaper): the plant goes
+            // from its billboard to its meshes at the measured crossing, as a plant without
+            // main branches does (#15: levels chosen from what they cost).
+            let triangles = plant.wood.triangle_count() + plant.leaves.triangle_count();
+            let dominated = !rest_only
+                && !params.mesh_per_branch
+                && b.switch_curve().is_some()
+                && select::LevelCosts::LAVAPIPE.below_costs_more(
+                    b,
+                    triangles,
+                    params.open_texel_pixels,
+                );
+            let measured = params.measured_switch && (rest_only || dominated) && params.levels >= 3;
+            skipped += usize::from(measured && dominated);
+            // Then its level below is never drawn: not uploaded either.
             let tree_set = out.add(&views, lights.len(), (min, max), &b.direct, &b.ambient);
             let mut placements = Vec::new();
             let mut small = Vec::new();
-            if params.levels >= 2 {
+            if params.levels >= 2 && !measured {
                 let object_sets: Vec<u32> = b
                     .objects
                     .iter()
@@ -278,25 +295,6 @@ impl Hbt {
             // A plant without main branches (its level below is its rest alone: an imported
             // mesh) has nothing between its tree billboard and its meshes; they open where
             // they were measured to get closer to the reference than the billboard (#15).
-            let rest_only = b.objects.iter().all(|o| o.object == hb::REST_OBJECT);
-            // A level below that costs more than the plant's meshes where the tree opens is
-            // dominated (the meshes are nearer the reference and cheaper): the plant goes
-            // from its billboard to its meshes at the measured crossing, as a plant without
-            // main branches does (#15: levels chosen from what they cost).
-            let triangles = plant.wood.triangle_count() + plant.leaves.triangle_count();
-            let dominated = !rest_only
-                && !params.mesh_per_branch
-                && b.switch_curve().is_some()
-                && select::LevelCosts::LAVAPIPE.below_costs_more(
-                    b,
-                    triangles,
-                    params.open_texel_pixels,
-                );
-            let measured = params.measured_switch && (rest_only || dominated) && params.levels >= 3;
-            skipped += usize::from(measured && dominated);
-            if measured {
-                placements.clear();
-            }
             let (texel, mesh_texel) = match measured {
                 true => (b.tree_texel(), b.tree_texel()),
                 false => (b.tree_texel(), b.mesh_texel()),
@@ -355,10 +353,18 @@ impl Hbt {
                 placements,
                 source: index,
                 ambient: b.ambient.clone(),
-                cubes: b.cubes.clone(),
+                cubes: if measured {
+                    Vec::new()
+                } else {
+                    b.cubes.clone()
+                },
                 cube_resolution: b.cube_resolution,
                 small,
-                small_cubes: b.small.cubes.clone(),
+                small_cubes: if measured {
+                    Vec::new()
+                } else {
+                    b.small.cubes.clone()
+                },
             });
         }
         let billboards = BillboardGpu::new(gpu, frame, tile, &tiles, &sets, &frames, params)?;
