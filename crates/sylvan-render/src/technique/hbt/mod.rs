@@ -94,9 +94,9 @@
 //!   nearer the reference — dominate it, and the plant goes from its billboard to its meshes
 //!   at the earlier of the measured crossing and the branch switch; the skipped level's BTFs
 //!   and cube-maps are not uploaded (a plant without main branches likewise). On lavapipe every preset's
-//!   level below is dearer (the chestnut's 1,458 branch billboards cost 45 ms where its
-//!   182k triangles cost 26, the pine's 118 cost 6.1 ms where its 5.2k triangles cost 2.7,
-//!   each alone at ≈ 90 px): measured on `eval/broadleaf.toml` and `example.toml` at
+//!   level below is dearer (the chestnut's 1,458 branch billboards cost 46.6 ms where its
+//!   182k triangles cost 34.4, the pine's 118 cost 9.8 ms where its 5.2k triangles cost 3.3,
+//!   each alone at ≈ 90 px; `scripts/measure-hbt-level-costs.sh`): measured on `eval/broadleaf.toml` and `example.toml` at
 //!   640×360 the frame is faster for an equal or lower ꟻLIP (BENCHMARKS.md, "the level below
 //!   against the meshes"). A GPU whose fragments are cheaper against its triangles keeps the
 //!   level where the constants say so; they are lavapipe's until measured there.

@@ -12,13 +12,12 @@ pub const FORMAT_VERSION: u32 = 7;
 pub const MAX_CUBE_RESOLUTION: u32 = 64;
 
 /// Half-sides of the facing quad `hbt.wgsl` (`hbt_vertex`) draws for a box of half-extents `h`
-/// seen along the unit direction `f` (model frame): the box projected on the quad's axes,
+/// seen along the unit direction `f` (model frame): the box's frame
+/// ([`PlaneFrame::for_box`](crate::bake::views::PlaneFrame::for_box), the same image axes),
 /// 10 % wider.
-pub fn facing_quad_half(h: Vec3, f: Vec3) -> (f32, f32) {
-    let up = if f.y.abs() < 0.99 { Vec3::Y } else { Vec3::Z };
-    let v = (up - f * up.dot(f)).normalize_or_zero();
-    let u = v.cross(f);
-    (u.abs().dot(h) * 1.1, v.abs().dot(h) * 1.1)
+fn facing_quad_half(h: Vec3, f: Vec3) -> (f32, f32) {
+    let half = crate::bake::views::PlaneFrame::for_box(f, -h, h).half;
+    (half.x * 1.1, half.y * 1.1)
 }
 
 /// One image as uploaded: its mip chain, each level `size² × 4` bytes of sRGB premultiplied

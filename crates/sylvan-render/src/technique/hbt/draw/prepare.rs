@@ -223,8 +223,10 @@ impl Hbt {
             // dominated (the meshes are nearer the reference and cheaper): the plant goes
             // from its billboard to its meshes at the measured crossing, as a plant without
             // main branches does (#15: levels chosen from what they cost).
+            let switch_measured = params.measured_switch && params.levels >= 3;
             let triangles = plant.wood.triangle_count() + plant.leaves.triangle_count();
-            let dominated = !rest_only
+            let dominated = switch_measured
+                && !rest_only
                 && !params.mesh_per_branch
                 && b.switch_curve().is_some()
                 && select::LevelCosts::LAVAPIPE.below_costs_more(
@@ -232,7 +234,7 @@ impl Hbt {
                     triangles,
                     params.open_texel_pixels,
                 );
-            let measured = params.measured_switch && (rest_only || dominated) && params.levels >= 3;
+            let measured = switch_measured && (rest_only || dominated);
             skipped += usize::from(measured && dominated);
             // Then its level below is never drawn: not uploaded either.
             let tree_set = out.add(&views, lights.len(), (min, max), &b.direct, &b.ambient);
