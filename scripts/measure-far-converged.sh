@@ -15,8 +15,10 @@
 # Usage: scripts/measure-far-converged.sh [M8_DIR] [OUT_DIR]
 #   M8_DIR (default out/measure-far-fidelity): a finished scripts/measure-far-fidelity.sh run
 #   (its m8.toml, PNGs and cache); OUT_DIR default M8_DIR/converged.
-# RES="4096 8192" TECHNIQUES="zfield auto"; REUSE=1 keeps PNGs already in OUT_DIR. About 100 s
-# per group on two cores (24 groups).
+# RES="4096 8192" TECHNIQUES="zfield auto"; TECH_RES (default the smaller of RES's last and
+# 5120: `zfield`'s translucent shadow layer takes 8 B a texel more, and 8192² is past the
+# renderer's shadow-memory limit) is the techniques' cascade resolution; REUSE=1 keeps PNGs
+# already in OUT_DIR. About 100 s per group on two cores (24 groups).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 M8=${1:-out/measure-far-fidelity}
@@ -27,6 +29,7 @@ TECHNIQUES=${TECHNIQUES:-zfield auto}
 . scripts/common.sh
 export SYLVAN_CACHE_DIR="$M8/cache"
 TOP=${RES##* }
+TECH_RES=${TECH_RES:-$((TOP < 5120 ? TOP : 5120))}
 
 # One line per group: band, first row, rows, shadow near and far (m), micro-view rows, padding.
 python3 - "$M8/m8.toml" "$OUT" > "$OUT/groups.txt" <<'EOF'
@@ -73,7 +76,7 @@ while read -r band y h near far rows pad; do
     render "g-$y-$res" "$OUT/g$y.toml" geometry "$res" "$rows" "$near" "$far" --spp 16
   done
   for t in $TECHNIQUES; do
-    render "$t-$y" "$OUT/g$y.toml" "$t" "$TOP" "$rows" "$near" "$far"
+    render "$t-$y" "$OUT/g$y.toml" "$t" "$TECH_RES" "$rows" "$near" "$far"
   done
 done < "$OUT/groups.txt"
 

@@ -363,16 +363,19 @@ pub struct FrameResources {
     pub cascade_binds: Vec<wgpu::BindGroup>,
     /// One depth view per cascade layer (render attachments).
     pub cascade_views: Vec<wgpu::TextureView>,
-    /// One opacity view per cascade layer (the shadow passes' colour attachment,
-    /// [`SHADOW_OPACITY_FORMAT`]): the opacity of the nearest caster at each texel, so
-    /// semi-transparent casters (`zfield`, BN12 §5) cast soft shadows.
-    pub opacity_views: Vec<wgpu::TextureView>,
+    /// One view per cascade layer of the translucent casters' layer (the shadow passes' colour
+    /// attachment, [`SHADOW_TRANSLUCENT_FORMAT`]): Σσ, Σσz and their count over every
+    /// translucent caster in front of the opaque ones, and the nearest one's depth, so
+    /// semi-transparent casters (`zfield`, BN12 §5) cast soft shadows that accumulate where
+    /// crowns overlap. Empty when the frame has no translucent casters: the shadow passes are
+    /// then depth only, and the main passes read a 1×1 layer of zeros (no caster).
+    pub translucent_views: Vec<wgpu::TextureView>,
     /// Shadow-map resolution per cascade.
     pub shadow_resolution: u32,
     /// The main pass's attachments, which every main-pass pipeline is built for.
     pub target: crate::pipeline::MainTarget,
     shadow_map: wgpu::Texture,
-    shadow_opacity: wgpu::Texture,
+    shadow_translucent: wgpu::Texture,
 }
 
 /// A `resolution²` texture of `format` with one layer per cascade (a render attachment, sampled
@@ -415,20 +418,27 @@ fn cascade_layers(
     (texture, array, layers)
 }
 
-/// The format of the cascades' opacity layer: the nearest caster's opacity (1: opaque).
-pub const SHADOW_OPACITY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
+/// The format of the cascades' translucent layer: r Σσ, g Σσz, b n over the n translucent
+/// casters (σ = −ln(1 − α), z their depth; blended with `Add`, cleared to 0) and a the
+/// nearest one's depth (blended with `Min`, cleared to 1: none).
+pub const SHADOW_TRANSLUCENT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 
-/// Bytes per shadow-map texel: depth (4) and opacity (1).
-pub const SHADOW_TEXEL_BYTES: u64 = 5;
+/// Bytes per shadow-map texel: depth (4), and the translucent layer (8) when a technique casts
+/// translucent shadows.
+pub fn shadow_texel_bytes(translucent: bool) -> u64 {
+    if translucent { 12 } else { 4 }
+}
 
 impl FrameResources {
-    /// Creates layouts, buffers and a `resolution²` shadow map per cascade, for main passes
+    /// Creates layouts, buffers and a `resolution²` shadow map per cascade (with the
+    /// translucent layer when `translucent`: a technique casts soft shadows), for main passes
     /// into `target`, binding the ground `cover`.
     pub fn new(
         gpu: &Gpu,
         resolution: u32,
         target: crate::pipeline::MainTarget,
         cover: &crate::world::cover::GroundCover,
+        translucent: bool,
     ) -> Self {
         let device = &gpu.device;
         let main_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -489,8 +499,15 @@ impl FrameResources {
             .collect();
         let (shadow_map, array_view, cascade_views) =
             cascade_layers(gpu, "shadow_map", DEPTH_FORMAT, resolution);
-        let (shadow_opacity, opacity_array, opacity_views) =
-            cascade_layers(gpu, "shadow_opacity", SHADOW_OPACITY_FORMAT, resolution);
+        let (shadow_translucent, translucent_array, mut translucent_views) = cascade_layers(
+            gpu,
+            "shadow_translucent",
+            SHADOW_TRANSLUCENT_FORMAT,
+            if translucent { resolution } else { 1 },
+        );
+        if !translucent {
+            translucent_views.clear();
+        }
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("shadow_sampler"),
             mag_filter: wgpu::FilterMode::Linear,
@@ -528,7 +545,7 @@ impl FrameResources {
                 },
                 wgpu::BindGroupEntry {
                     binding: 6,
-                    resource: wgpu::BindingResource::TextureView(&opacity_array),
+                    resource: wgpu::BindingResource::TextureView(&translucent_array),
                 },
             ],
         });
@@ -553,19 +570,29 @@ impl FrameResources {
             main_bind,
             cascade_binds,
             cascade_views,
-            opacity_views,
+            translucent_views,
             shadow_resolution: resolution,
             target,
             shadow_map,
-            shadow_opacity,
+            shadow_translucent,
         }
     }
 
-    /// GPU bytes of the shadow maps (depth and opacity).
+    /// Whether the shadow passes have the translucent layer (a technique casts soft shadows:
+    /// `PassKind::ShadowTranslucent` pipelines need it).
+    pub fn translucent(&self) -> bool {
+        !self.translucent_views.is_empty()
+    }
+
+    /// GPU bytes of the shadow maps (depth and the translucent layer).
     pub fn bytes(&self) -> u64 {
-        let s = self.shadow_map.size();
-        debug_assert_eq!(s, self.shadow_opacity.size());
-        s.width as u64 * s.height as u64 * s.depth_or_array_layers as u64 * SHADOW_TEXEL_BYTES
+        let texels = |t: &wgpu::Texture| {
+            let s = t.size();
+            s.width as u64 * s.height as u64 * s.depth_or_array_layers as u64
+        };
+        texels(&self.shadow_map) * shadow_texel_bytes(false)
+            + texels(&self.shadow_translucent)
+                * (shadow_texel_bytes(true) - shadow_texel_bytes(false))
     }
 }
 

@@ -125,10 +125,22 @@ pub enum PassKind {
     /// The main view, into the renderer's [`MainTarget`] (Sylvan's own: HDR colour and
     /// reversed-Z depth).
     Main,
-    /// A shadow cascade: depth, standard Z (compare Less), with slope-scaled bias, and the
-    /// nearest caster's opacity (`frame::SHADOW_OPACITY_FORMAT`; casters without a fragment
-    /// entry write 1).
+    /// A shadow cascade, an opaque caster: depth, standard Z (compare LessEqual), with
+    /// slope-scaled bias; the translucent layer (`frame::SHADOW_TRANSLUCENT_FORMAT`) is
+    /// attached but not written.
     Shadow,
+    /// A shadow cascade, a translucent caster (BN12 §5's soft shadows): depth-tested against
+    /// the opaque casters, not written; the fragment entry returns `TranslucentFragment`
+    /// (`frame.wgsl`): its optical depth σ, σz and 1 (blended `Add`) and its depth (alpha,
+    /// blended `Min`), so overlapping crowns accumulate in any order.
+    ShadowTranslucent,
+}
+
+impl PassKind {
+    /// Whether this is a shadow cascade's pass (either kind of caster).
+    pub fn is_shadow(self) -> bool {
+        !matches!(self, PassKind::Main)
+    }
 }
 
 /// What differs between Sylvan's render pipelines.
@@ -147,8 +159,9 @@ pub struct PipelineSpec<'a> {
     pub buffers: &'a [Option<wgpu::VertexBufferLayout<'a>>],
     /// Pass kind.
     pub pass: PassKind,
-    /// The main pass's attachments (`FrameResources::target`; unused by shadow passes).
-    pub target: &'a MainTarget,
+    /// The frame the pipeline draws in: the main pass's attachments (`FrameResources::target`)
+    /// and whether the shadow passes have the translucent layer.
+    pub frame: &'a crate::frame::FrameResources,
     /// Face culling (`None`: two-sided).
     pub cull: Option<wgpu::Face>,
     /// Whether the pipeline writes depth.
@@ -168,9 +181,10 @@ pub fn build(gpu: &Gpu, spec: &PipelineSpec) -> wgpu::RenderPipeline {
             bind_group_layouts: &layouts,
             immediate_size: 0,
         });
+    let target = &spec.frame.target;
     let (compare, bias) = match spec.pass {
-        PassKind::Main => (spec.target.compare(), wgpu::DepthBiasState::default()),
-        PassKind::Shadow => (
+        PassKind::Main => (target.compare(), wgpu::DepthBiasState::default()),
+        PassKind::Shadow | PassKind::ShadowTranslucent => (
             wgpu::CompareFunction::LessEqual,
             wgpu::DepthBiasState {
                 constant: 2,
@@ -179,24 +193,48 @@ pub fn build(gpu: &Gpu, spec: &PipelineSpec) -> wgpu::RenderPipeline {
             },
         ),
     };
-    let targets = [Some(match spec.pass {
-        PassKind::Main => wgpu::ColorTargetState {
-            format: spec.target.color_format,
-            blend: spec.blend,
-            write_mask: wgpu::ColorWrites::ALL,
-        },
-        // The nearest caster's opacity (the depth test keeps the nearest).
-        PassKind::Shadow => wgpu::ColorTargetState {
-            format: crate::frame::SHADOW_OPACITY_FORMAT,
-            blend: None,
-            write_mask: wgpu::ColorWrites::RED,
-        },
-    })];
-    // A shadow pass has an opacity attachment, so every caster has a fragment stage:
-    // depth-only casters write opacity 1 (`fs_shadow_opaque`, frame.wgsl).
+    let written = |format, blend, write_mask| {
+        Some(wgpu::ColorTargetState {
+            format,
+            blend,
+            write_mask,
+        })
+    };
+    // The translucent layer: Σσ, Σσz, n summed, the nearest depth kept.
+    let component = |operation| wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::One,
+        dst_factor: wgpu::BlendFactor::One,
+        operation,
+    };
+    let accumulate = wgpu::BlendState {
+        color: component(wgpu::BlendOperation::Add),
+        alpha: component(wgpu::BlendOperation::Min),
+    };
+    let layer = crate::frame::SHADOW_TRANSLUCENT_FORMAT;
+    let translucent = spec.frame.translucent();
+    let targets: Vec<Option<wgpu::ColorTargetState>> = match spec.pass {
+        PassKind::Main => vec![written(
+            target.color_format,
+            spec.blend,
+            wgpu::ColorWrites::ALL,
+        )],
+        // Opaque casters leave the translucent layer alone (the depth test keeps them).
+        PassKind::Shadow if translucent => vec![written(layer, None, wgpu::ColorWrites::empty())],
+        PassKind::Shadow => Vec::new(),
+        PassKind::ShadowTranslucent => {
+            assert!(
+                translucent,
+                "a translucent caster in a frame without the translucent layer"
+            );
+            vec![written(layer, Some(accumulate), wgpu::ColorWrites::ALL)]
+        }
+    };
+    // A shadow pass with the translucent layer has a colour attachment, so every caster has a
+    // fragment stage: depth-only casters get `fs_shadow_opaque` (frame.wgsl), which writes
+    // nothing but depth. Without it they stay depth only.
     let fs = match spec.pass {
-        PassKind::Main => spec.fs,
-        PassKind::Shadow => Some(spec.fs.unwrap_or("fs_shadow_opaque")),
+        PassKind::Shadow if translucent => Some(spec.fs.unwrap_or("fs_shadow_opaque")),
+        _ => spec.fs,
     };
     gpu.device
         .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
@@ -220,18 +258,20 @@ pub fn build(gpu: &Gpu, spec: &PipelineSpec) -> wgpu::RenderPipeline {
             },
             depth_stencil: Some(wgpu::DepthStencilState {
                 format: match spec.pass {
-                    PassKind::Main => spec.target.depth_format,
-                    PassKind::Shadow => DEPTH_FORMAT,
+                    PassKind::Main => target.depth_format,
+                    PassKind::Shadow | PassKind::ShadowTranslucent => DEPTH_FORMAT,
                 },
-                depth_write_enabled: Some(spec.depth_write),
+                depth_write_enabled: Some(
+                    spec.depth_write && spec.pass != PassKind::ShadowTranslucent,
+                ),
                 depth_compare: Some(compare),
                 stencil: Default::default(),
                 bias,
             }),
             multisample: wgpu::MultisampleState {
                 count: match spec.pass {
-                    PassKind::Main => spec.target.sample_count,
-                    PassKind::Shadow => 1,
+                    PassKind::Main => target.sample_count,
+                    PassKind::Shadow | PassKind::ShadowTranslucent => 1,
                 },
                 ..Default::default()
             },

@@ -413,14 +413,42 @@ impl Renderer {
             )));
         }
         let res = options.shadow_resolution;
-        let texel = crate::frame::SHADOW_TEXEL_BYTES;
+        let entry = registry::find(&options.technique)?;
+        let settings: Vec<Setting> = scene
+            .technique_params
+            .iter()
+            .chain(&options.settings)
+            .cloned()
+            .collect();
+        // The cascades' translucent layer, where a `zfield` (alone or a band) casts soft shadows.
+        let members = match entry.kind {
+            registry::Kind::Chain => crate::technique::lod::members(scene, &options.settings)?,
+            _ => vec![(entry.name, settings.clone())],
+        };
+        let mut translucent = false;
+        for (name, s) in &members {
+            if *name == crate::technique::zfield::ENTRY.name {
+                translucent |= crate::technique::zfield::casts_translucent(s)?;
+            }
+        }
+        let texel = crate::frame::shadow_texel_bytes(translucent);
         let shadow_bytes = CASCADES as u64 * res as u64 * res as u64 * texel;
         if shadow_bytes > MAX_SHADOW_BYTES {
             return Err(RenderError::Option(format!(
-                "--shadow-res {res}: {CASCADES} cascades of {res}² depth and opacity take {:.1} GB, more than the {} MB allowed — use {} or less",
+                "--shadow-res {res}: {CASCADES} cascades of {res}² depth{} take {:.1} GB, more than the {} MB allowed — use {} or less{}",
+                if translucent {
+                    " and translucent layers"
+                } else {
+                    ""
+                },
                 shadow_bytes as f64 / 1e9,
                 MAX_SHADOW_BYTES >> 20,
-                ((MAX_SHADOW_BYTES / (CASCADES as u64 * texel)) as f64).sqrt() as u32 & !255
+                ((MAX_SHADOW_BYTES / (CASCADES as u64 * texel)) as f64).sqrt() as u32 & !255,
+                if translucent {
+                    " (or zfield.shadow_opacity=false: opaque casters, depth only)"
+                } else {
+                    ""
+                }
             )));
         }
         let bounds: Vec<SpeciesBounds> = plants
@@ -446,7 +474,13 @@ impl Renderer {
             t.size,
             &cover_settings(scene, &source, far),
         )?;
-        let frame = FrameResources::new(gpu, res, caller_target.unwrap_or(MainTarget::OWN), &cover);
+        let frame = FrameResources::new(
+            gpu,
+            res,
+            caller_target.unwrap_or(MainTarget::OWN),
+            &cover,
+            translucent,
+        );
         let resolver = Resolver::new(gpu);
         let targets = match caller_target {
             Some(_) => None,
@@ -458,7 +492,6 @@ impl Renderer {
                 factor,
             )?),
         };
-        let entry = registry::find(&options.technique)?;
         // A GPU-driven technique draws the world tile by tile; any other gets every tree now.
         let gpu_driven = !options.cpu_driven
             && match entry.kind {
@@ -482,12 +515,6 @@ impl Renderer {
             })?
         };
         let instances = Instances::new(gpu, &trees, &bounds);
-        let settings: Vec<Setting> = scene
-            .technique_params
-            .iter()
-            .chain(&options.settings)
-            .cloned()
-            .collect();
         registry::check_settings(&settings)?;
         for band in &scene.lod_bands {
             registry::check_settings(&band.params)?;
@@ -902,22 +929,31 @@ impl Renderer {
                 self.timer.mark(encoder, mark);
                 continue;
             }
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("shadow_pass"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &self.frame.opacity_views[c],
+            let translucent: Vec<_> = self
+                .frame
+                .translucent_views
+                .get(c)
+                .map(|view| wgpu::RenderPassColorAttachment {
+                    view,
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations {
-                        // Opaque where no caster is: such a texel's depth (1) shadows nothing,
-                        // and `sun_visibility` reads one texel's opacity for a tap whose
-                        // bilinear compare also weighs its neighbours — an empty texel must
-                        // not lighten their shadow (it did with 0: the edges of shadows
-                        // depended on casters behind the receiver).
-                        load: wgpu::LoadOp::Clear(wgpu::Color::WHITE),
+                        load: wgpu::LoadOp::Clear(wgpu::Color {
+                            r: 0.0,
+                            g: 0.0,
+                            b: 0.0,
+                            a: 1.0,
+                        }),
                         store: wgpu::StoreOp::Store,
                     },
-                })],
+                })
+                .into_iter()
+                .map(Some)
+                .collect();
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("shadow_pass"),
+                // The translucent casters' layer, if any: no optical depth, no front (depth 1).
+                color_attachments: &translucent,
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: &self.frame.cascade_views[c],
                     depth_ops: Some(wgpu::Operations {

@@ -27,7 +27,7 @@ impl SkyPass {
                 fs: Some("fs_sky"),
                 buffers: &[],
                 pass: PassKind::Main,
-                target: &frame.target,
+                frame,
                 cull: None,
                 depth_write: false,
                 blend: None,

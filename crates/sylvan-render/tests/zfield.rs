@@ -830,13 +830,11 @@ fn sky_light_follows_the_local_density_of_trees() {
     );
 }
 
-#[test]
-fn shadows_keep_the_crowns_opacity() {
-    // BN12 §5: the cascades store the casters' opacity, so a crown a quarter opaque lets three
-    // quarters of the sun through, as the meshes' alpha-tested leaves do on average (the PCF
-    // and the crop average their pattern), with `shadow_opacity = true`. Thresholded at ½ (the
-    // default, here the negative control) it casts nothing. The ground under the veil's shadow, seen from
-    // straight above, against the same ground without it; sun only.
+/// The share of the sun that `trees` (veils: `common::veil_plant`) block on the ground around
+/// the first veil's shadow (sun 45° high from azimuth 180°, so a veil of height h at `AT` shades
+/// `AT + (0, 0, h)`), drawn by `technique` with `extra` settings: the ground's linear radiance
+/// seen from straight above (green, its strongest channel) against open ground; sun only.
+fn veil_blocking(trees: &[TreeInstance], technique: &str, extra: &[&str]) -> f64 {
     let sun = common::sun(180.0, 45.0);
     let shadow_centre = AT + Vec3::new(0.0, 0.0, 7.0);
     let camera = Camera {
@@ -852,13 +850,6 @@ fn shadows_keep_the_crowns_opacity() {
         s.sky.ground = [0.0; 3];
         s
     };
-    let veil = [TreeInstance {
-        position: AT,
-        species: 0,
-        seed: 0,
-        height: 7.0,
-        rotation: 0.0,
-    }];
     let luma = |scene: &Scene, technique: &str, extra: &[&str]| {
         let mut settings = small_settings();
         settings.extend(extra.iter().map(|a| Setting::from_arg(a).unwrap()));
@@ -872,16 +863,39 @@ fn shadows_keep_the_crowns_opacity() {
         };
         let gpu = gpu();
         let (img, r) = common::render_with_options(&gpu, scene, &[common::veil_plant()], &options);
-        save(&format!("veil-{technique}-{}", extra.len()), &img);
-        // Linear radiance, green (the ground's strongest channel).
+        save(
+            &format!("veil-{technique}-{}-{}", scene.trees.len(), extra.len()),
+            &img,
+        );
         r.radiance_mean(&gpu, [8, 8, 48, 48]).expect("radiance")[1] as f64
     };
     let open = luma(&scene_with(Vec::new()), "geometry", &[]);
-    let shaded = scene_with(veil.to_vec());
-    let blocked = |l: f64| 1.0 - l / open;
-    let geometry = blocked(luma(&shaded, "geometry", &[]));
-    let soft = blocked(luma(&shaded, "zfield", &["zfield.shadow_opacity=true"]));
-    let hard = blocked(luma(&shaded, "zfield", &[]));
+    1.0 - luma(&scene_with(trees.to_vec()), technique, extra) / open
+}
+
+/// A veil (`common::veil_plant`: a 6 m horizontal leaf card at 7 m, one texel in four opaque)
+/// at `AT` scaled to `height`, moved `back` metres towards the sun (−z) so that its shadow
+/// still falls on `AT + (0, 0, height − back)`.
+fn veil(height: f32, back: f32) -> TreeInstance {
+    TreeInstance {
+        position: AT - Vec3::new(0.0, 0.0, back),
+        species: 0,
+        seed: 0,
+        height,
+        rotation: 0.0,
+    }
+}
+
+#[test]
+fn shadows_keep_the_crowns_opacity() {
+    // BN12 §5: the cascades store the casters' opacity, so a crown a quarter opaque lets three
+    // quarters of the sun through, as the meshes' alpha-tested leaves do on average (the PCF
+    // and the crop average their pattern), with `shadow_opacity = true` (the default).
+    // Thresholded at ½ (`shadow_opacity = false`, here the negative control) it casts nothing.
+    let one = [veil(7.0, 0.0)];
+    let geometry = veil_blocking(&one, "geometry", &[]);
+    let soft = veil_blocking(&one, "zfield", &[]);
+    let hard = veil_blocking(&one, "zfield", &["zfield.shadow_opacity=false"]);
     eprintln!(
         "sunlight blocked under the veil: geometry {geometry:.3}, zfield {soft:.3}, thresholded {hard:.3}"
     );
@@ -896,6 +910,31 @@ fn shadows_keep_the_crowns_opacity() {
     assert!(
         hard < 0.5 * geometry,
         "thresholded at ½ the veil should cast (almost) nothing: {hard}"
+    );
+}
+
+#[test]
+fn overlapping_crowns_accumulate_their_shadows() {
+    // Two veils one above the other along the sun (the second 1 m higher and 1 m towards it:
+    // the same shadow): the ground gets what both let through, 1 − (1 − b)² of one veil's b,
+    // as under the meshes — not the nearest crown's share alone (what a single stored opacity
+    // layer gave, too bright under dense canopies).
+    let one = [veil(7.0, 0.0)];
+    let two = [veil(7.0, 0.0), veil(8.0, 1.0)];
+    let geometry = veil_blocking(&two, "geometry", &[]);
+    let single = veil_blocking(&one, "zfield", &[]);
+    let both = veil_blocking(&two, "zfield", &[]);
+    let product = 1.0 - (1.0 - single).powi(2);
+    eprintln!(
+        "sunlight blocked under two veils: geometry {geometry:.3}, zfield {both:.3} (one veil {single:.3}, the product {product:.3})"
+    );
+    assert!(
+        (both - product).abs() <= 0.15 * product,
+        "two veils block {both}, the product of one's ({single}) is {product}"
+    );
+    assert!(
+        (both - geometry).abs() <= 0.3 * geometry,
+        "zfield blocks {both}, the meshes {geometry}"
     );
 }
 

@@ -221,7 +221,28 @@ fn bad_flags_give_one_line_errors() {
     // Checked against a declared memory limit before allocating (was a bare "Out of Memory").
     assert_one_line_error(
         &sylvan(&["render", scene, "--shadow-res", "16384"], &dir),
-        &["--shadow-res 16384", "GB", "use 8192 or less"],
+        &["--shadow-res 16384", "GB", "use 8960 or less"],
+    );
+    // With a technique that casts translucent shadows the layer counts too, and the way out
+    // is named.
+    assert_one_line_error(
+        &sylvan(
+            &[
+                "render",
+                scene,
+                "--technique",
+                "zfield",
+                "--shadow-res",
+                "8192",
+            ],
+            &dir,
+        ),
+        &[
+            "--shadow-res 8192",
+            "translucent",
+            "use 5120 or less",
+            "zfield.shadow_opacity=false",
+        ],
     );
     assert_one_line_error(
         &sylvan(&["render", scene, "--shadow-res", "100"], &dir),

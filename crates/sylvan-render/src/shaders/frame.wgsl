@@ -39,14 +39,30 @@ struct Frame {
 @group(0) @binding(3) var cover_atlas: texture_2d<f32>;
 @group(0) @binding(4) var cover_tags: texture_2d<u32>;
 @group(0) @binding(5) var cover_sampler: sampler;
-// The cascades' opacity layer: the nearest caster's opacity per texel (1 opaque).
-@group(0) @binding(6) var shadow_opacity: texture_2d_array<f32>;
+// The cascades' translucent layer (BN12 §5's soft shadows, `PassKind::ShadowTranslucent`):
+// r Σσ, g Σσz, b n over the n translucent casters in front of the opaque ones (σ = −ln(1 − α),
+// z their depth), a the nearest one's depth (1: none).
+@group(0) @binding(6) var shadow_translucent: texture_2d_array<f32>;
 
-// A shadow caster's output: its opacity (r) and depth.
+// An opaque shadow caster's output: its depth (location 0 is not written).
 struct ShadowFragment {
-    @location(0) opacity: vec4<f32>,
+    @location(0) unused: vec4<f32>,
     @builtin(frag_depth) depth: f32,
 };
+
+// A translucent shadow caster's output (`PassKind::ShadowTranslucent`): σ, σz, 1 (summed) and
+// its depth (alpha, the nearest kept by `Min`); the depth attachment only tests it against
+// the opaque casters.
+struct TranslucentFragment {
+    @location(0) layer: vec4<f32>,
+    @builtin(frag_depth) depth: f32,
+};
+
+// A translucent caster of opacity `alpha` at clip depth `depth`.
+fn translucent_caster(alpha: f32, depth: f32) -> TranslucentFragment {
+    let sigma = -log(1.0 - clamp(alpha, 0.0, 0.999));
+    return TranslucentFragment(vec4<f32>(sigma, sigma * depth, 1.0, depth), depth);
+}
 
 // The depth buffer's value at a world point (this pass's projection), clamped to [0, 1]: for
 // fragment stages that write the depth of the point they show.
@@ -55,8 +71,8 @@ fn clip_depth(world: vec3<f32>) -> f32 {
     return clamp(clip.z / clip.w, 0.0, 1.0);
 }
 
-// An opaque caster's opacity (shadow passes: the casters without their own fragment entry,
-// and those that test coverage and discard).
+// An opaque caster's colour output (not written: `PassKind::Shadow`'s targets have empty write
+// masks; kept so that casters that test coverage and discard have one fragment signature).
 fn opaque_caster() -> vec4<f32> {
     return vec4<f32>(1.0);
 }
@@ -64,6 +80,21 @@ fn opaque_caster() -> vec4<f32> {
 @fragment
 fn fs_shadow_opaque() -> @location(0) vec4<f32> {
     return opaque_caster();
+}
+
+// The optical depth of the translucent casters in front of a receiver at depth `z` behind the
+// nearest one (at `front`), from their sums `od` (Σσ, Σσz, n): the n casters are taken as
+// spread evenly along the sun from `front` to the end their σ-weighted mean depth implies
+// (2 mean − front), so a receiver between crowns gets the share in front of it and one behind
+// them all (the ground under a stand) gets every one. One caster: all of it.
+fn translucent_depth(od: vec3<f32>, front: f32, z: f32) -> f32 {
+    if (od.z <= 1.001) {
+        return od.x;
+    }
+    let mean = od.y / max(od.x, 1e-6);
+    let span = max(2.0 * (mean - front), 0.0);
+    let layer = span / (od.z - 1.0);
+    return od.x * clamp((z - front + layer) / max(span + layer, 1e-9), 0.0, 1.0);
 }
 
 // The shadow cascade covering `world` (by view distance), or CASCADES beyond the last one.
@@ -77,9 +108,16 @@ fn cascade_index(world: vec3<f32>) -> u32 {
     return CASCADES;
 }
 
-// Fraction of sunlight reaching `world` (1 = lit), 3×3 PCF in the cascade covering it; behind
-// a caster, 1 − its opacity.
+// Fraction of sunlight reaching `world` (1 = lit), 3×3 PCF in the cascade covering it: 0
+// behind an opaque caster, behind translucent ones the light they let through.
 fn sun_visibility(world: vec3<f32>, normal_offset: vec3<f32>) -> f32 {
+    return sun_visibility_own(world, normal_offset, 0.0);
+}
+
+// `sun_visibility` of a point inside a translucent caster of optical depth `own` along the sun
+// (a z-field tree's light entry point: its own crown is in the texel's sum, and its own
+// shadowing is the tree's own term), which is taken out of the sum.
+fn sun_visibility_own(world: vec3<f32>, normal_offset: vec3<f32>, own: f32) -> f32 {
     if (frame.sun_dir.w < 0.5) {
         return 1.0;
     }
@@ -95,17 +133,22 @@ fn sun_visibility(world: vec3<f32>, normal_offset: vec3<f32>) -> f32 {
         return 1.0;
     }
     let t = frame.shadow_params.x;
-    let size = vec2<f32>(textureDimensions(shadow_opacity).xy);
+    let size = vec2<f32>(textureDimensions(shadow_translucent).xy);
     var lit = 0.0;
     for (var y = -1; y <= 1; y = y + 1) {
         for (var x = -1; x <= 1; x = x + 1) {
             let tap = uv + vec2<f32>(f32(x), f32(y)) * t;
-            let behind = 1.0 - textureSampleCompareLevel(shadow_map, shadow_sampler, tap, i32(cascade), ndc.z);
-            // Behind the nearest caster, the light it lets through (BN12 §5: opacity stored in
-            // the shadow maps for soft shadows).
+            let open = textureSampleCompareLevel(shadow_map, shadow_sampler, tap, i32(cascade), ndc.z);
+            // Behind the nearest translucent caster (with a margin for its 16-bit depth), the
+            // light the translucent casters in front let through (BN12 §5: opacity in the
+            // shadow maps for soft shadows).
             let texel = clamp(vec2<i32>(tap * size), vec2<i32>(0), vec2<i32>(size) - 1);
-            let opacity = textureLoad(shadow_opacity, texel, i32(cascade), 0).r;
-            lit = lit + 1.0 - behind * opacity;
+            let layer = textureLoad(shadow_translucent, texel, i32(cascade), 0);
+            var through = 1.0;
+            if (ndc.z > layer.a * (1.0 + 1e-3)) {
+                through = exp(-max(translucent_depth(layer.rgb, layer.a, ndc.z) - own, 0.0));
+            }
+            lit = lit + open * through;
         }
     }
     // Fade out over the last 10% of the last cascade instead of a hard edge.

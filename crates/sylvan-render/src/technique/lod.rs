@@ -217,14 +217,39 @@ pub fn presence(bands: &[Band], i: usize, distance: f32) -> f32 {
 
 /// Whether every band of `scene`'s chain is GPU-driven (then the chain is).
 pub(crate) fn gpu_driven(scene: &sylvan_scene::Scene) -> Result<bool, RenderError> {
-    let bands = if scene.lod_bands.is_empty() {
-        parse_chain(&scene.lod_chain)?
-    } else {
-        from_tables(&scene.lod_bands)?
-    };
-    Ok(bands
+    Ok(bands(scene)?
         .iter()
         .all(|b| registry::find(b.technique).is_ok_and(|e| e.gpu_driven)))
+}
+
+/// The scene's bands: its `[[lod.band]]` tables, else its `[lod] chain` (or the default).
+pub(crate) fn bands(scene: &sylvan_scene::Scene) -> Result<Vec<Band>, RenderError> {
+    if scene.lod_bands.is_empty() {
+        parse_chain(&scene.lod_chain)
+    } else {
+        from_tables(&scene.lod_bands)
+    }
+}
+
+/// The techniques `scene`'s chain draws, each with its settings: the scene's
+/// `[technique.NAME]` tables, then the band's own, then `overrides` (the command line's).
+pub(crate) fn members(
+    scene: &sylvan_scene::Scene,
+    overrides: &[Setting],
+) -> Result<Vec<(&'static str, Vec<Setting>)>, RenderError> {
+    Ok(bands(scene)?
+        .into_iter()
+        .map(|band| {
+            let settings = scene
+                .technique_params
+                .iter()
+                .chain(&band.settings)
+                .chain(overrides)
+                .cloned()
+                .collect();
+            (band.technique, settings)
+        })
+        .collect())
 }
 
 /// Fills each band's instance list from the frame's (`ranges`: each band's, `None` for a
@@ -280,20 +305,11 @@ impl Chain {
     /// then the band's own, then the command line's.
     fn build(cx: &mut BuildContext<'_>) -> Result<Built, RenderError> {
         params::resolve::<NoParams, NoParams>("auto", &cx.settings_for("auto"))?;
-        let bands = if cx.scene.lod_bands.is_empty() {
-            parse_chain(&cx.scene.lod_chain)?
-        } else {
-            from_tables(&cx.scene.lod_bands)?
-        };
-        let settings_of = |band: &Band| -> Vec<Setting> {
-            cx.scene
-                .technique_params
-                .iter()
-                .chain(&band.settings)
-                .chain(cx.overrides)
-                .cloned()
-                .collect()
-        };
+        let bands = bands(cx.scene)?;
+        let settings_of: Vec<Vec<Setting>> = members(cx.scene, cx.overrides)?
+            .into_iter()
+            .map(|(_, s)| s)
+            .collect();
         let n = bands.len();
         let mut techniques: Vec<Option<Box<dyn Technique>>> = (0..n).map(|_| None).collect();
         let mut ranges: Vec<Option<BandRange>> = vec![None; n];
@@ -306,7 +322,7 @@ impl Chain {
             .chain((0..n).filter(|&i| Some(i) != field_band));
         for i in order {
             let band = &bands[i];
-            let settings = settings_of(band);
+            let settings = &settings_of[i];
             let range = match Some(i) == field_band {
                 true => BandRange::new(band.start, band.end),
                 false => band_range(&bands, i, false),
@@ -319,7 +335,7 @@ impl Chain {
                 population: cx.population,
                 band: range,
                 field: field.as_ref(),
-                settings: &settings,
+                settings,
                 overrides: cx.overrides,
                 policy: cx.policy,
                 progress: &mut *cx.progress,

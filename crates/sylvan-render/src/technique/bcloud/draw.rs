@@ -511,7 +511,7 @@ impl BillboardCloud {
                     fs: Some(fs),
                     buffers: &buffers,
                     pass,
-                    target: &frame.target,
+                    frame,
                     // Each box's inside faces: one fragment per pixel, also with the eye
                     // inside the box.
                     cull: Some(wgpu::Face::Front),

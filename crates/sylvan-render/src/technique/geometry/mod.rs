@@ -305,7 +305,7 @@ impl MeshPipelines {
                     fs,
                     buffers: &buffers,
                     pass,
-                    target: &frame.target,
+                    frame,
                     cull,
                     depth_write: true,
                     blend: None,

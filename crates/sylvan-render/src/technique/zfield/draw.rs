@@ -180,7 +180,8 @@ impl ZFieldBindings {
             extra: [
                 draw.lod_bias,
                 f32::from(u8::from(draw.density_per_ha > 0.0)),
-                f32::from(u8::from(draw.shadow_opacity)),
+                // (unused: the casters' kind is the shadow pipeline's)
+                0.0,
                 f32::from(u8::from(draw.tight_casters)),
             ],
             more: [draw.sky_normal_weight, 0.0, 0.0, 0.0],
@@ -283,7 +284,7 @@ impl ZField {
                     fs: Some(fs),
                     buffers: &buffers,
                     pass,
-                    target: &frame.target,
+                    frame,
                     cull: None,
                     depth_write: true,
                     blend,
@@ -314,11 +315,21 @@ impl ZField {
         // The casters fade into the field as the trees do (group 2 there too).
         let mut shadow_layouts = vec![&frame.shadow_layout, &bind_layout];
         shadow_layouts.extend(field.map(|f| &f.layout));
+        // Opaque above α ½, or translucent into the cascades' accumulating layer.
+        if draw.shadow_opacity && !frame.translucent() {
+            return Err(RenderError::Option(
+                "zfield.shadow_opacity: this frame was made without the cascades' translucent layer (the renderer makes it when a zfield band casts soft shadows) — set zfield.shadow_opacity=false".into(),
+            ));
+        }
+        let (shadow_fs, shadow_pass) = match draw.shadow_opacity {
+            true => ("fs_zfield_shadow_soft", PassKind::ShadowTranslucent),
+            false => ("fs_zfield_shadow", PassKind::Shadow),
+        };
         let shadow_pipeline = build(
             "zfield_shadow",
             "vs_zfield_shadow",
-            "fs_zfield_shadow",
-            PassKind::Shadow,
+            shadow_fs,
+            shadow_pass,
             &shadow_layouts,
             None,
         );

@@ -285,6 +285,8 @@ fn z_reconstruct(sp: ZSpecies, views: vec3<u32>, w: vec3<f32>, p: vec3<f32>, r: 
 struct ZLight {
     pl: vec3<f32>,
     tau: f32,
+    // The crown's opacity along the light ray (0 where it misses).
+    alpha: f32,
 };
 
 fn z_light(sp: ZSpecies, views: vec3<u32>, w: vec3<f32>, pv: vec3<f32>, lm: vec3<f32>, lod: f32) -> ZLight {
@@ -294,6 +296,7 @@ fn z_light(sp: ZSpecies, views: vec3<u32>, w: vec3<f32>, pv: vec3<f32>, lm: vec3
     var out: ZLight;
     out.pl = pv;
     out.tau = zp.sun.x;
+    out.alpha = zl.w;
     if (zl.w > 0.004) {
         out.pl = p1 - lm * plane_distance(sp, zl.x, zl.w);
         if (zp.atlas.w > 0.5) {
@@ -365,7 +368,10 @@ fn z_fragment(in: ZOut, masked: bool) -> ZFragment {
     // isotropic (scaled by `sun_scale`), optionally blended towards the reference's leaf
     // response at the baked normal (`normal_weight`).
     let phase = zp.sun.y * phase_shape(n, l);
-    let vis = sun_visibility(world_l, vec3<f32>(0.0));
+    // The tree's own crown along the sun is its exp(−τ…) term, not the cascades' (its caster,
+    // with the opacity it casts, is in the translucent sum when `shadow_opacity` is on).
+    let own = -log(1.0 - clamp(presence_alpha(light.alpha, in.rot.w) * field_fade(in.base_scale.xyz), 0.0, 0.999));
+    let vis = sun_visibility_own(world_l, vec3<f32>(0.0), own);
     let sun = frame.sun_color.rgb * albedo * phase * exp(-tau * path_m) * hotspot(v, l) * vis;
     // Eq. 9: sky × δ_v × the cylindrical hole of the local density Λ_h(x), d below the
     // crown's top, × the slope term (1 + n·u_z)/2 of the ground under the tree — both from the
@@ -391,37 +397,48 @@ fn z_fragment(in: ZOut, masked: bool) -> ZFragment {
 
 // Shadow casters (BN12 §5): the quad facing the sun, step 5 only, at the max depth z̄ (the
 // trees' back side, so they do not shadow their own lit side); opaque where α > ½ (the 3×3
-// PCF softens the edges), or with `shadow_opacity` storing the crown's opacity α in the
-// cascades' opacity layer: what lies behind the nearest crown gets 1 − α of the sun (BN12's
-// soft shadows; one layer, so too bright under dense canopies — not the default).
+// PCF softens the edges), or with `shadow_opacity` translucent (`fs_zfield_shadow_soft`): the
+// crown's optical depth accumulates in the cascades' translucent layers, so what lies behind
+// overlapping crowns gets the product of what each lets through (BN12's soft shadows).
 @vertex
 fn vs_zfield_shadow(in: ZIn, inst: TreeInstance) -> ZOut {
     return z_vertex(in, inst, frame.sun_dir.xyz, true, true);
 }
 
-@fragment
-fn fs_zfield_shadow(in: ZOut) -> ShadowFragment {
+// A caster's opacity (`w`, with the tree's presence and its fade into a forest field) and the
+// clip depth of its back side (`z̄`, x) — or opacity 0 where the z-field is empty.
+fn caster(in: ZOut) -> vec2<f32> {
     let sp = z_species[in.views.w];
     let p = instance_to_model(in.world, in.base_scale, in.rot);
     let lm = instance_dir_to_model(frame.sun_dir.xyz, in.rot);
     let z = zfield3(sp, in.views.xyz, in.weights, p, in.lod);
     if (z.w < 0.004) {
-        discard;
+        return vec2<f32>(0.0);
     }
-    // While the tree cross-fades with another technique its shadow fades stochastically by
-    // presence (opaque, so it composes with the other's binary casters); into a forest field
-    // (BN12 §7) its opacity fades as the tree does — stochastically when thresholded.
-    let presence = in.rot.w < 0.999;
-    let fade = field_fade(in.base_scale.xyz);
-    let a = presence_alpha(z.w, in.rot.w) * fade;
-    let soft = zp.extra.z > 0.5;
-    let stochastic = presence || (!soft && fade < 0.999);
-    let threshold = select(select(0.5, 0.004, soft), hash13(vec3<f32>(in.pos.xy, 3.0 + 97.0 * in.rot.z)), stochastic);
-    if (a <= threshold) {
-        discard;
-    }
-    let opacity = select(1.0, clamp(a, 0.0, 1.0), soft && !presence);
     let back = p - lm * plane_distance(sp, z.y, z.w);
     let world = instance_to_world(back, in.base_scale, in.rot);
-    return ShadowFragment(vec4<f32>(opacity), clip_depth(world));
+    let a = presence_alpha(z.w, in.rot.w) * field_fade(in.base_scale.xyz);
+    return vec2<f32>(clip_depth(world), a);
+}
+
+@fragment
+fn fs_zfield_shadow(in: ZOut) -> ShadowFragment {
+    let c = caster(in);
+    // While the tree cross-fades with another technique, or into a forest field (BN12 §7),
+    // its shadow fades stochastically by opacity (a threshold hashed per pixel and tree).
+    let fading = in.rot.w < 0.999 || field_fade(in.base_scale.xyz) < 0.999;
+    let threshold = select(0.5, hash13(vec3<f32>(in.pos.xy, 3.0 + 97.0 * in.rot.z)), fading);
+    if (c.y <= max(threshold, 0.004)) {
+        discard;
+    }
+    return ShadowFragment(vec4<f32>(1.0), c.x);
+}
+
+@fragment
+fn fs_zfield_shadow_soft(in: ZOut) -> TranslucentFragment {
+    let c = caster(in);
+    if (c.y < 0.004) {
+        discard;
+    }
+    return translucent_caster(c.y, c.x);
 }
