@@ -210,6 +210,34 @@ fn bad_flags_give_one_line_errors() {
                 "render",
                 scene,
                 "--technique",
+                "auto",
+                "--chain",
+                "geometry:0-40,nerf:40-",
+            ],
+            &dir,
+        ),
+        &["--chain", "unknown technique 'nerf'"],
+    );
+    assert_one_line_error(
+        &sylvan(
+            &[
+                "render",
+                scene,
+                "--technique",
+                "hbt",
+                "--chain",
+                "geometry:0-40,hbt:40-",
+            ],
+            &dir,
+        ),
+        &["--chain", "add --technique auto"],
+    );
+    assert_one_line_error(
+        &sylvan(
+            &[
+                "render",
+                scene,
+                "--technique",
                 "octahedral",
                 "--occlusion-cull",
                 "--cpu-driven",
@@ -539,6 +567,15 @@ fn band_tables_and_set_reach_the_technique() {
     assert!(
         banded["trees_drawn"]["octahedral"].as_u64() >= Some(1),
         "{banded}"
+    );
+    // `--chain` replaces the scene's bands: everything beyond 10 m as octahedral now, and no
+    // boxtree.
+    let chained = render(&["--chain", "geometry:0-10,octahedral:10-"]);
+    assert!(chained["trees_drawn"]["boxtree"].is_null(), "{chained}");
+    assert!(
+        chained["trees_drawn"]["octahedral"].as_u64()
+            >= banded["trees_drawn"]["octahedral"].as_u64(),
+        "{chained} against {banded}"
     );
     let closed = render(&["--set", "boxtree.texel_pixels=60"]);
     let opened = render(&["--set", "boxtree.texel_pixels=0.1"]);

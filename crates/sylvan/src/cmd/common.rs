@@ -68,6 +68,11 @@ pub struct ViewArgs {
     /// keeps).
     #[arg(long)]
     pub occlusion_cull: bool,
+    /// The LOD chain of `auto`, replacing the scene's `[lod]` (its chain or band tables):
+    /// comma-separated "technique:START-END" entries in metres, the last open-ended, e.g.
+    /// "geometry:0-40,hbt:40-150,zfield:150-1000,shadermap:1000-".
+    #[arg(long, value_name = "CHAIN")]
+    pub chain: Option<String>,
     #[command(flatten)]
     pub bake: BakeArgs,
 }
@@ -280,6 +285,18 @@ impl ViewArgs {
         let mut scene = load_scene(self.scene.as_deref())?;
         if self.no_ground_occlusion {
             scene.sky.ground_occlusion = false;
+        }
+        if let Some(chain) = &self.chain {
+            scene.lod_chain = chain.split(',').map(|e| e.trim().to_string()).collect();
+            scene.lod_bands.clear();
+            sylvan_render::technique::lod::parse_chain(&scene.lod_chain)
+                .map_err(|e| anyhow::anyhow!("--chain: {e}"))?;
+            if self.technique_name() != "auto" {
+                bail!(
+                    "--chain is the chain of `auto`, and the technique is `{}` — add --technique auto",
+                    self.technique_name()
+                );
+            }
         }
         check_scene_settings(&scene)?;
         let camera = match &self.camera {
