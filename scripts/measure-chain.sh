@@ -5,8 +5,9 @@
 # built-in camera's eye (the mid band is the lower ~40 % of the picture, z-fields and the field
 # the rest), each against 16-spp geometry of the same view: ꟻLIP of the whole picture and of
 # its lower part (rows 150–270 of 270: the mid band), and the frame time (`sylvan bench`, 3
-# frames after warm-up). The rule: the cheapest chain whose ꟻLIP is within 1.25× one-sample
-# geometry's, on the whole picture and on the lower part.
+# frames after warm-up). The rule (BENCHMARKS.md "The built-in forest's chain, measured"): the
+# cheapest candidate whose ꟻLIP on the lower part is within 1.25× that of `geometry` drawing
+# the band (the whole picture's ꟻLIP is the z-field and field bands', the same for all).
 # Usage: scripts/measure-chain.sh [OUT_DIR]   (default out/measure-chain)
 # PHASE=all|render|bench (bench reuses the renders' PNGs and the cache); SIZE=480x270;
 # CANDIDATES="octahedral hbt boxtree billboard-cloud zfield geometry". The reference takes

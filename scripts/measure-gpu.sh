@@ -14,14 +14,14 @@ set -uo pipefail
 cd "$(dirname "$0")/.."
 mode=${1:-run}
 # forest-1m and forest-10m with the built-in forest's chain (their files keep the default
-# chain, geometry → boxtree, which is not GPU-driven) and its 8³ × 8 shader-map tables.
+# chain, geometry → boxtree, which stops at the trees) and its 8³ × 8 shader-map tables.
 chained() {
   local f=assets/scenes/bench/.gpu-$1${2:-}.toml
   sed "s/^method = \"tiled\"/method = \"${2:-tiled}\"/" assets/scenes/bench/$1.toml >"$f"
   cat >>"$f" <<'TOML'
 
 [lod]
-chain = ["geometry:0-40", "octahedral:40-150", "zfield:150-1000", "shadermap:1000-"]
+chain = ["geometry:0-40", "boxtree:40-150", "zfield:150-1000", "shadermap:1000-"]
 
 [technique.shadermap]
 theta = 8

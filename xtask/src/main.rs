@@ -243,8 +243,8 @@ fn demo() -> Result<(), String> {
     quiet_driver_noise(&mut c);
     run(
         c,
-        "rendering the built-in forest (1280x720, technique auto: geometry, octahedral, zfield, \
-         then BN12's shader-map to the horizon; the first run bakes the impostors, z-fields and \
+        "rendering the built-in forest (1280x720, technique auto: geometry, boxtree, zfield, \
+         then BN12's shader-map to the horizon; the first run bakes the box trees, z-fields and \
          ground tables into ~/.cache/sylvan — minutes on a CPU driver, once)",
     )?;
     let text = std::fs::read_to_string(&stats).map_err(|e| format!("{}: {e}", stats.display()))?;

@@ -84,11 +84,15 @@ pub const BUILTIN_SIZE_M: f32 = 1280.0;
 /// Extent of the built-in forest's terrain ([`Scene::builtin_default`]), metres.
 pub const BUILTIN_FOREST_SIZE_M: f32 = 10240.0;
 
-/// The built-in forest's LOD chain: full geometry near, the octahedral impostor in the middle
-/// distance, BN12's z-fields to 1 km and its shader-map beyond, to the horizon.
+/// The built-in forest's LOD chain: full geometry near, LCV04's box trees in the middle
+/// distance, BN12's z-fields to 1 km and its shader-map beyond, to the horizon. The middle
+/// band's technique was chosen by measurement (`scripts/measure-chain.sh`, BENCHMARKS.md "The
+/// built-in forest's chain, measured"): of octahedral, hbt, boxtree, billboard-cloud and
+/// zfield, boxtree was the closest to 16-spp geometry there (ꟻLIP 1.20× that of geometry drawing
+/// the band; the octahedral impostor 1.65×) and as fast as the fastest on lavapipe.
 pub const BUILTIN_FOREST_CHAIN: [&str; 4] = [
     "geometry:0-40",
-    "octahedral:40-150",
+    "boxtree:40-150",
     "zfield:150-1000",
     "shadermap:1000-",
 ];
