@@ -136,13 +136,6 @@ pub enum PassKind {
     ShadowTranslucent,
 }
 
-impl PassKind {
-    /// Whether this is a shadow cascade's pass (either kind of caster).
-    pub fn is_shadow(self) -> bool {
-        !matches!(self, PassKind::Main)
-    }
-}
-
 /// What differs between Sylvan's render pipelines.
 pub struct PipelineSpec<'a> {
     /// Debug label.
@@ -223,8 +216,8 @@ pub fn build(gpu: &Gpu, spec: &PipelineSpec) -> wgpu::RenderPipeline {
         PassKind::Shadow => Vec::new(),
         PassKind::ShadowTranslucent => {
             assert!(
-                translucent,
-                "a translucent caster in a frame without the translucent layer"
+                translucent && spec.fs.is_some(),
+                "a translucent caster needs the frame's translucent layer and a fragment entry"
             );
             vec![written(layer, Some(accumulate), wgpu::ColorWrites::ALL)]
         }

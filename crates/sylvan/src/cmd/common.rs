@@ -120,6 +120,30 @@ pub struct Resolved {
     pub camera: Camera,
     pub sun: Sun,
     pub options: RenderOptions,
+    /// The command line's changes to the scene (the viewer applies them to each reload).
+    pub overrides: SceneOverrides,
+}
+
+/// What the command line changes in a loaded scene: `--chain` and `--no-ground-occlusion`.
+#[derive(Debug, Clone, Default)]
+pub struct SceneOverrides {
+    /// `--chain`'s entries, replacing the scene's `[lod]` chain or band tables.
+    pub chain: Option<Vec<String>>,
+    /// `--no-ground-occlusion`.
+    pub no_ground_occlusion: bool,
+}
+
+impl SceneOverrides {
+    /// Applies the overrides to `scene` (as loaded from its file).
+    pub fn apply(&self, scene: &mut Scene) {
+        if self.no_ground_occlusion {
+            scene.sky.ground_occlusion = false;
+        }
+        if let Some(chain) = &self.chain {
+            scene.lod_chain = chain.clone();
+            scene.lod_bands.clear();
+        }
+    }
 }
 
 /// An error and its causes on one line, without repeating a cause already in the message (as
@@ -283,13 +307,15 @@ impl ViewArgs {
         };
         options.factor()?;
         let mut scene = load_scene(self.scene.as_deref())?;
-        if self.no_ground_occlusion {
-            scene.sky.ground_occlusion = false;
-        }
-        if let Some(chain) = &self.chain {
-            scene.lod_chain = chain.split(',').map(|e| e.trim().to_string()).collect();
-            scene.lod_bands.clear();
-            sylvan_render::technique::lod::parse_chain(&scene.lod_chain)
+        let overrides = SceneOverrides {
+            chain: self
+                .chain
+                .as_ref()
+                .map(|c| c.split(',').map(|e| e.trim().to_string()).collect()),
+            no_ground_occlusion: self.no_ground_occlusion,
+        };
+        if let Some(chain) = &overrides.chain {
+            sylvan_render::technique::lod::parse_chain(chain)
                 .map_err(|e| anyhow::anyhow!("--chain: {e}"))?;
             if self.technique_name() != "auto" {
                 bail!(
@@ -298,6 +324,7 @@ impl ViewArgs {
                 );
             }
         }
+        overrides.apply(&mut scene);
         check_scene_settings(&scene)?;
         let camera = match &self.camera {
             Some(c) => parse_camera(c, scene.camera)?,
@@ -312,6 +339,7 @@ impl ViewArgs {
             camera,
             sun,
             options,
+            overrides,
         })
     }
 }

@@ -180,8 +180,9 @@ impl ZFieldBindings {
             extra: [
                 draw.lod_bias,
                 f32::from(u8::from(draw.density_per_ha > 0.0)),
-                // (unused: the casters' kind is the shadow pipeline's)
-                0.0,
+                // Soft casters: a tree's light entry point leaves its own crown out of the
+                // cascades' translucent sums (it is in them only when it casts there).
+                f32::from(u8::from(draw.shadow_opacity)),
                 f32::from(u8::from(draw.tight_casters)),
             ],
             more: [draw.sky_normal_weight, 0.0, 0.0, 0.0],
@@ -263,6 +264,11 @@ impl ZField {
         density: f32,
         field: Option<&crate::technique::shadermap::field::ForestField>,
     ) -> Result<Self, RenderError> {
+        if draw.shadow_opacity && !frame.translucent() {
+            return Err(RenderError::Option(
+                "zfield.shadow_opacity: this frame was made without the cascades' translucent layer (the renderer makes it when a zfield band casts soft shadows) — set zfield.shadow_opacity=false".into(),
+            ));
+        }
         let ZFieldBindings {
             layout: bind_layout,
             bind,
@@ -316,11 +322,6 @@ impl ZField {
         let mut shadow_layouts = vec![&frame.shadow_layout, &bind_layout];
         shadow_layouts.extend(field.map(|f| &f.layout));
         // Opaque above α ½, or translucent into the cascades' accumulating layer.
-        if draw.shadow_opacity && !frame.translucent() {
-            return Err(RenderError::Option(
-                "zfield.shadow_opacity: this frame was made without the cascades' translucent layer (the renderer makes it when a zfield band casts soft shadows) — set zfield.shadow_opacity=false".into(),
-            ));
-        }
         let (shadow_fs, shadow_pass) = match draw.shadow_opacity {
             true => ("fs_zfield_shadow_soft", PassKind::ShadowTranslucent),
             false => ("fs_zfield_shadow", PassKind::Shadow),

@@ -369,8 +369,9 @@ fn z_fragment(in: ZOut, masked: bool) -> ZFragment {
     // response at the baked normal (`normal_weight`).
     let phase = zp.sun.y * phase_shape(n, l);
     // The tree's own crown along the sun is its exp(−τ…) term, not the cascades' (its caster,
-    // with the opacity it casts, is in the translucent sum when `shadow_opacity` is on).
-    let own = -log(1.0 - clamp(presence_alpha(light.alpha, in.rot.w) * field_fade(in.base_scale.xyz), 0.0, 0.999));
+    // with the opacity it casts, is in the translucent sum when `shadow_opacity` is on:
+    // `zp.extra.z`).
+    let own = -log(1.0 - clamp(presence_alpha(light.alpha, in.rot.w) * field_fade(in.base_scale.xyz), 0.0, 0.999)) * zp.extra.z;
     let vis = sun_visibility_own(world_l, vec3<f32>(0.0), own);
     let sun = frame.sun_color.rgb * albedo * phase * exp(-tau * path_m) * hotspot(v, l) * vis;
     // Eq. 9: sky × δ_v × the cylindrical hole of the local density Λ_h(x), d below the

@@ -255,6 +255,7 @@ impl App {
             c.resolved.sun,
             controller,
         )?;
+        viewer.overrides = c.resolved.overrides.clone();
         viewer.settings.render_scale = c.render_scale;
         viewer.settings.vsync = c.vsync;
         viewer.settings.debug = c.debug;

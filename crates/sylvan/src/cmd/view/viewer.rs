@@ -62,6 +62,8 @@ pub struct Viewer {
     pub camera: Controller,
     /// Hot reload of the scene file (none for the built-in scene).
     pub watcher: Option<SceneWatcher>,
+    /// The command line's changes to the scene, applied to each reload too.
+    pub overrides: crate::cmd::common::SceneOverrides,
     /// The last error, one line, shown in the panel until the next success.
     pub error: Option<String>,
     /// A short note for the panel (screenshot written, path saved, …).
@@ -110,6 +112,7 @@ impl Viewer {
             settings,
             camera,
             watcher,
+            overrides: Default::default(),
             error: None,
             notice: None,
             comparison: Comparison::default(),
@@ -127,7 +130,10 @@ impl Viewer {
             .and_then(|w| w.poll(std::time::Instant::now()))
         {
             match result {
-                Ok(scene) => self.reload(gpu, scene),
+                Ok(mut scene) => {
+                    self.overrides.apply(&mut scene);
+                    self.reload(gpu, scene)
+                }
                 Err(e) => self.error = Some(e),
             }
         }
