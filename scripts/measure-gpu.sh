@@ -21,7 +21,7 @@ chained() {
   cat >>"$f" <<'TOML'
 
 [lod]
-chain = ["geometry:0-40", "boxtree:40-150", "zfield:150-1000", "shadermap:1000-"]
+chain = ["geometry:0-40", "boxtree:40-120", "zfield:120-1000", "shadermap:1000-"]
 
 [technique.shadermap]
 theta = 8

@@ -86,14 +86,16 @@ pub const BUILTIN_FOREST_SIZE_M: f32 = 10240.0;
 
 /// The built-in forest's LOD chain: full geometry near, LCV04's box trees in the middle
 /// distance, BN12's z-fields to 1 km and its shader-map beyond, to the horizon. The middle
-/// band's technique was chosen by measurement (`scripts/measure-chain.sh`, BENCHMARKS.md "The
-/// built-in forest's chain, measured"): of octahedral, hbt, boxtree, billboard-cloud and
-/// zfield, boxtree was the closest to 16-spp geometry there (ꟻLIP 1.20× that of geometry drawing
-/// the band; the octahedral impostor 1.65×) and as fast as the fastest on lavapipe.
+/// band's technique and its end were chosen by measurement (`scripts/measure-chain.sh`,
+/// BENCHMARKS.md "The built-in forest's chain, measured"): of octahedral, hbt, boxtree,
+/// billboard-cloud and zfield in 40–150 m, boxtree was the closest to 16-spp geometry (ꟻLIP
+/// 1.20× that of geometry drawing the band; the octahedral impostor 1.65×) and as fast as the
+/// fastest on lavapipe; handing over to z-fields at 120 m rather than 150 m was closer still
+/// (box trees' coarse images lose to z-fields beyond ~120 m, z-fields to box trees nearer).
 pub const BUILTIN_FOREST_CHAIN: [&str; 4] = [
     "geometry:0-40",
-    "boxtree:40-150",
-    "zfield:150-1000",
+    "boxtree:40-120",
+    "zfield:120-1000",
     "shadermap:1000-",
 ];
 
