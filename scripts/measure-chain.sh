@@ -8,7 +8,8 @@
 # frames after warm-up). The rule (BENCHMARKS.md "The built-in forest's chain, measured"): the
 # cheapest candidate whose ꟻLIP on the lower part is within 1.25× that of `geometry` drawing
 # the band (the whole picture's ꟻLIP is the z-field and field bands', the same for all).
-# Usage: scripts/measure-chain.sh [OUT_DIR]   (default out/measure-chain)
+# Usage: scripts/measure-chain.sh [OUT_DIR]   (default out/measure-chain); about 10 min of
+# renders plus 2 min of benches on lavapipe once the bakes are cached.
 # PHASE=all|render|bench (bench reuses the renders' PNGs and the cache); SIZE=480x270;
 # CANDIDATES="octahedral hbt boxtree billboard-cloud zfield geometry". The reference takes
 # about 2.5 min on lavapipe, each candidate's first run bakes its images for 4 species.
@@ -39,7 +40,7 @@ if [[ $PHASE != bench ]]; then
     $S render "${VIEW[@]}" --technique auto --chain "$(chain_of "$c")" --out "$OUT/$c.png" 2>>"$OUT/log.txt"
   done
 fi
-echo "| mid band (40–150 m) | chain | ꟻLIP whole | ꟻLIP lower part | median ms | ratio to the current chain |"
+echo "| mid band (40–150 m) | chain | ꟻLIP whole | ꟻLIP lower part | median ms | ratio to the first candidate |"
 echo "|---|---|---:|---:|---:|---:|"
 echo "| (geometry 1 spp) | — | $(flip "$OUT/ref.png" "$OUT/geo1.png") | $(flip "$OUT/ref.png" "$OUT/geo1.png" --crop "$LOW") | | |"
 base=""
@@ -53,3 +54,17 @@ for c in $CANDIDATES; do
   ratio=$([[ -n $ms ]] && python3 -c "print('%.2f' % ($ms / $base))" || true)
   echo "| $c | \`$(chain_of "$c")\` | $(flip "$OUT/ref.png" "$OUT/$c.png") | $(flip "$OUT/ref.png" "$OUT/$c.png" --crop "$LOW") | $ms | $ratio |"
 done
+
+# Then the chosen technique's end (the z-fields' start), fidelity only: BOUNDARIES="70 100 120
+# 150 200" metres (BEST=boxtree).
+BEST=${BEST:-boxtree}
+if [[ $PHASE != bench ]]; then
+  echo
+  echo "| chain | ꟻLIP whole | ꟻLIP lower part |"
+  echo "|---|---:|---:|"
+  for b in ${BOUNDARIES:-70 100 120 150 200}; do
+    c="geometry:0-40,$BEST:40-$b,zfield:$b-1000,shadermap:1000-"
+    $S render "${VIEW[@]}" --technique auto --chain "$c" --out "$OUT/$BEST-$b.png" 2>>"$OUT/log.txt"
+    echo "| \`$c\` | $(flip "$OUT/ref.png" "$OUT/$BEST-$b.png") | $(flip "$OUT/ref.png" "$OUT/$BEST-$b.png" --crop "$LOW") |"
+  done
+fi
