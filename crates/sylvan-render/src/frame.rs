@@ -602,7 +602,7 @@ pub enum DebugView {
     /// The normal image.
     #[default]
     None,
-    /// Trees tinted by the technique that drew them (geometry orange), the terrain grey.
+    /// Trees tinted by the technique that drew them (geometry orange, z-fields yellow: `Entry::debug_color`), the terrain grey.
     Technique,
     /// Terrain and trees tinted by the shadow cascade covering them (red, green, blue, yellow).
     Cascades,

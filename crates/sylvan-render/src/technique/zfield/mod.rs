@@ -413,7 +413,7 @@ pub const ENTRY: Entry = Entry {
     name: "zfield",
     kind: Kind::PerTree,
     summary: "BN12 §5 z-fields: one quad per tree, 181 depth/AO/opacity views, view and light rays reconstructed",
-    debug_color: [1.0, 0.55, 0.1],
+    debug_color: [1.0, 0.9, 0.15],
     gpu_driven: true,
     schema: params::schema::<ZFieldBakeParams, ZFieldDrawParams>,
     check: |s| resolve(s).map(|_| ()),
