@@ -929,31 +929,31 @@ impl Renderer {
                 self.timer.mark(encoder, mark);
                 continue;
             }
-            let translucent: Vec<_> = self
-                .frame
-                .translucent_views
-                .get(c)
-                .map(|view| wgpu::RenderPassColorAttachment {
-                    view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color {
-                            r: 0.0,
-                            g: 0.0,
-                            b: 0.0,
-                            a: 1.0,
-                        }),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })
-                .into_iter()
-                .map(Some)
-                .collect();
+            let translucent =
+                self.frame
+                    .translucent_views
+                    .get(c)
+                    .map(|view| wgpu::RenderPassColorAttachment {
+                        view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color {
+                                r: 0.0,
+                                g: 0.0,
+                                b: 0.0,
+                                a: 1.0,
+                            }),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    });
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("shadow_pass"),
                 // The translucent casters' layer, if any: no optical depth, no front (depth 1).
-                color_attachments: &translucent,
+                color_attachments: match translucent {
+                    Some(_) => std::slice::from_ref(&translucent),
+                    None => &[],
+                },
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: &self.frame.cascade_views[c],
                     depth_ops: Some(wgpu::Operations {

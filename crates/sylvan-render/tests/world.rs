@@ -428,27 +428,36 @@ fn caster_cull_changes_no_pixel_and_draws_fewer_casters() {
         ..Default::default()
     };
     let mut s = forest_scene(300.0, 60.0, world);
+    // One frame of `technique` (`settings` added) under the scene's sun.
+    let shot = |s: &sylvan_scene::Scene,
+                technique: &str,
+                settings: &[&str],
+                cpu_driven: bool,
+                caster_cull: bool| {
+        let options = RenderOptions {
+            width: 128,
+            height: 128,
+            shadow_resolution: 512,
+            cpu_driven,
+            caster_cull,
+            technique: technique.into(),
+            cache: sylvan_render::bake::CachePolicy::Off,
+            settings: settings
+                .iter()
+                .map(|a| sylvan_scene::Setting::from_arg(a).unwrap())
+                .collect(),
+            ..Default::default()
+        };
+        let mut r = Renderer::new(&gpu, s, &[test_tree()], &options).expect("renderer");
+        let stats = r.render(&gpu, &s.camera, &s.sun).expect("frame");
+        let img = image::DynamicImage::ImageRgba8(r.read_image(&gpu).unwrap()).into_rgb8();
+        (img, stats)
+    };
     for (azimuth, elevation) in [(135.0, 35.0), (-45.0, 50.0), (60.0, 12.0)] {
         s.sun = sun(azimuth, elevation);
         for cpu_driven in [false, true] {
-            let shot = |caster_cull: bool| {
-                let options = RenderOptions {
-                    width: 128,
-                    height: 128,
-                    shadow_resolution: 512,
-                    cpu_driven,
-                    caster_cull,
-                    technique: "geometry".into(),
-                    cache: sylvan_render::bake::CachePolicy::Off,
-                    ..Default::default()
-                };
-                let mut r = Renderer::new(&gpu, &s, &[test_tree()], &options).expect("renderer");
-                let stats = r.render(&gpu, &s.camera, &s.sun).expect("frame");
-                let img = image::DynamicImage::ImageRgba8(r.read_image(&gpu).unwrap()).into_rgb8();
-                (img, stats)
-            };
-            let (all, all_stats) = shot(false);
-            let (culled, culled_stats) = shot(true);
+            let (all, all_stats) = shot(&s, "geometry", &[], cpu_driven, false);
+            let (culled, culled_stats) = shot(&s, "geometry", &[], cpu_driven, true);
             let what = format!("sun {azimuth},{elevation}, cpu_driven {cpu_driven}");
             eprintln!(
                 "{what}: shadow triangles {} of {}",
@@ -474,24 +483,9 @@ fn caster_cull_changes_no_pixel_and_draws_fewer_casters() {
     // receiver no longer enters the spread estimate of the texel's sums
     // (`translucent_depth`), so a few pixels may change, by little.
     s.sun = sun(135.0, 35.0);
-    let shot = |caster_cull: bool| {
-        let options = RenderOptions {
-            width: 128,
-            height: 128,
-            shadow_resolution: 512,
-            caster_cull,
-            technique: "zfield".into(),
-            cache: sylvan_render::bake::CachePolicy::Off,
-            settings: vec![sylvan_scene::Setting::from_arg("zfield.tile=32").unwrap()],
-            ..Default::default()
-        };
-        let mut r = Renderer::new(&gpu, &s, &[test_tree()], &options).expect("renderer");
-        let stats = r.render(&gpu, &s.camera, &s.sun).expect("frame");
-        let img = image::DynamicImage::ImageRgba8(r.read_image(&gpu).unwrap()).into_rgb8();
-        (img, stats)
-    };
-    let (all, all_stats) = shot(false);
-    let (culled, culled_stats) = shot(true);
+    let zfield = ["zfield.tile=32"];
+    let (all, all_stats) = shot(&s, "zfield", &zfield, false, false);
+    let (culled, culled_stats) = shot(&s, "zfield", &zfield, false, true);
     let f = sylvan_eval::flip(&all, &culled).unwrap().mean;
     eprintln!(
         "zfield: caster triangles {} of {}, ꟻLIP {f}",
