@@ -191,14 +191,14 @@ impl Instances {
         }
     }
 
-    /// Refills this list from `master`: every record for which `presence(record)` is above 0
-    /// is kept with that presence in `rot.w` (multiplied into the master's), per pass and
-    /// species, and uploaded.
+    /// Refills this list from `master`: every record for which `presence(record, species)` is
+    /// above 0 is kept with that presence in `rot.w` (multiplied into the master's), per pass
+    /// and species, and uploaded.
     pub fn fill_from(
         &mut self,
         gpu: &Gpu,
         master: &Instances,
-        mut presence: impl FnMut(&GpuTreeInstance) -> f32,
+        mut presence: impl FnMut(&GpuTreeInstance, usize) -> f32,
     ) {
         self.staging.clear();
         self.ids.clear();
@@ -210,7 +210,7 @@ impl Instances {
                     .iter()
                     .zip(master.ids(pass, species))
                 {
-                    let p = presence(rec);
+                    let p = presence(rec, species);
                     if p > 0.0 {
                         let mut r = *rec;
                         r.rot[3] *= p;

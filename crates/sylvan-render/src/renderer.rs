@@ -878,6 +878,7 @@ impl Renderer {
                 far: view.far,
                 frustums: &frustums,
                 casters: casters.as_ref(),
+                pixels_per_metre: fv.pixels_per_metre,
             };
             world.prepare(gpu, encoder, &wv)?;
         } else {

@@ -365,11 +365,35 @@ fn chain_radiance(
     shadows: bool,
     cache: &std::path::Path,
 ) -> [f32; 3] {
-    let gpu = gpu();
     let mut scene = stand();
     if let Some(t) = trees {
         scene.trees = t.to_vec();
     }
+    let view = ChainView {
+        camera,
+        shadows,
+        debug: sylvan_render::DebugView::None,
+    };
+    chain_mean(&scene, s_max, &view, extra, cache)
+}
+
+/// How [`chain_mean`] looks at a scene.
+struct ChainView<'a> {
+    camera: &'a Camera,
+    shadows: bool,
+    debug: sylvan_render::DebugView,
+}
+
+/// [`chain_radiance`] of any `scene` (one test tree per species), in `view.debug`.
+fn chain_mean(
+    scene: &sylvan_scene::Scene,
+    s_max: f32,
+    view: &ChainView<'_>,
+    extra: &[&str],
+    cache: &std::path::Path,
+) -> [f32; 3] {
+    let gpu = gpu();
+    let mut scene = scene.clone();
     scene.lod_chain = vec![format!("zfield:0-{s_max}"), format!("shadermap:{s_max}-")];
     let mut settings = settings();
     settings.extend(extra.iter().map(|a| Setting::from_arg(a).unwrap()));
@@ -378,14 +402,21 @@ fn chain_radiance(
         height: 64,
         technique: "auto".into(),
         settings,
-        shadows,
+        shadows: view.shadows,
         cache: CachePolicy::Dir(cache.to_path_buf()),
+        debug: view.debug,
         ..Default::default()
     };
-    let plants = vec![common::test_tree()];
+    let plants = vec![common::test_tree(); scene.species.len()];
     let mut r = Renderer::new(&gpu, &scene, &plants, &options).expect("renderer");
-    r.render(&gpu, camera, &scene.sun).expect("frame");
+    r.render(&gpu, view.camera, &scene.sun).expect("frame");
     r.radiance_mean(&gpu, [16, 16, 32, 32]).expect("radiance")
+}
+
+/// Pixels per metre at one metre of a 64-pixel-high frame `fov_deg` wide (as the renderer
+/// computes it).
+fn pixels_per_metre(fov_deg: f32) -> f32 {
+    64.0 / (2.0 * (fov_deg.to_radians() * 0.5).tan())
 }
 
 fn temp_cache(name: &str) -> std::path::PathBuf {
@@ -482,4 +513,127 @@ fn zfield_trees_fade_linearly_into_the_field() {
         (share - 0.5).abs() <= 0.02,
         "coverage share at 0.9 s_max: {share}"
     );
+}
+
+#[test]
+fn a_tree_is_left_to_the_field_where_it_is_handover_px_tall() {
+    // BN12 §4's "trees under 3 px are never drawn": with the field's start far beyond it, one
+    // tree fades over [0.8, 1] of where it is `handover_px` tall — at 0.9 of that distance it
+    // covers ½ of what it covers nearer, and beyond it nothing (the field's density is 0 and ν
+    // is forced to 0, as in the test above). With `handover_px = 0` (the negative control) it is
+    // drawn whole wherever the pixel rule would have dropped it.
+    let cache = temp_cache("pixel-rule");
+    let tree = [TreeInstance {
+        position: Vec3::new(300.0, 0.0, 300.0),
+        species: 0,
+        seed: 0,
+        height: 10.0,
+        rotation: 0.0,
+    }];
+    let fov = 5.0;
+    let camera = camera_at(Vec3::new(300.0, 5.0, 300.0), 70.0, 100.0, fov);
+    let d = camera.position.distance(tree[0].position);
+    let s_max = 4.0 * d;
+    // The tree ends at 10 m × ppm / px: at d / k for px = 10 ppm k / d.
+    let px = |k: f32| 10.0 * pixels_per_metre(fov) * k / d;
+    let at = |px: f32| {
+        let extra = [
+            "shadermap.density_scale=0".to_string(),
+            "shadermap.nu=0".to_string(),
+            format!("shadermap.handover_px={px}"),
+        ];
+        let extra: Vec<&str> = extra.iter().map(String::as_str).collect();
+        chain_radiance(s_max, Some(&tree), &camera, &extra, false, &cache)
+    };
+    let (near, faded, gone, off) = (at(px(0.5)), at(px(0.9)), at(px(1.2)), at(0.0));
+    let _ = std::fs::remove_dir_all(&cache);
+    let c = (0..3)
+        .max_by(|&a, &b| {
+            (near[a] - gone[a])
+                .abs()
+                .total_cmp(&(near[b] - gone[b]).abs())
+        })
+        .unwrap();
+    let share = |v: [f32; 3]| (v[c] - gone[c]) / (near[c] - gone[c]);
+    eprintln!(
+        "near {near:?}, at 0.9 of its end {faded:?}, beyond {gone:?}, no pixel rule {off:?}: shares {:.4} / {:.4}",
+        share(faded),
+        share(off)
+    );
+    assert!(
+        (near[c] - gone[c]).abs() > 0.2 * gone[c],
+        "the tree must show against the ground: {near:?} vs {gone:?}"
+    );
+    assert!(
+        (share(faded) - 0.5).abs() <= 0.02,
+        "coverage share at 0.9 of its end: {}",
+        share(faded)
+    );
+    assert!(
+        share(off) > 0.98,
+        "without the rule the tree is drawn whole: {}",
+        share(off)
+    );
+}
+
+#[test]
+fn the_field_takes_each_species_share_from_its_own_end() {
+    // A stand of 10 m trees and 6 m ones (the same plant, species 1) mixed at random, seen
+    // 400 m away, the field's start far beyond: with the pixel rule set so the short trees end
+    // at 320 m (`handover_px` ≈ 6.9 at this view) they are gone, and the field must cover the
+    // ground with their share — `field_handover_at` weighs each species' own fade by its crown
+    // area. The covered fraction (`--debug coverage`) stays within a third of what removing the
+    // short trees costs (the negative control: the field taking nothing for them), and is
+    // continuous where they start fading and where they end (under 1 % a step of 2 %).
+    let cache = temp_cache("species-ends");
+    let mut scene = stand();
+    for (i, t) in scene.trees.iter_mut().enumerate() {
+        if (i * 2_654_435_761) % 1000 < 500 {
+            t.species = 1;
+            t.height = 6.0;
+        }
+    }
+    scene.species.push(scene.species[0].clone());
+    // Wide enough for a few dozen trees in the measured half of the frame.
+    let fov = 10.0;
+    let d = 400.0;
+    let camera = camera_at(Vec3::new(300.0, 0.0, 300.0), 30.0, d, fov);
+    let view = ChainView {
+        camera: &camera,
+        shadows: false,
+        debug: sylvan_render::DebugView::Coverage,
+    };
+    // The short trees end at 6 m × ppm / px: at d / k for px = 6 ppm k / d.
+    let px = |k: f32| 6.0 * pixels_per_metre(fov) * k / d;
+    let covered = |scene: &sylvan_scene::Scene, px: f32| {
+        let setting = format!("shadermap.handover_px={px}");
+        chain_mean(scene, 1000.0, &view, &[setting.as_str()], &cache)[0]
+    };
+    let all = covered(&scene, px(0.5));
+    let handed = covered(&scene, px(1.25));
+    let mut tall_only = scene.clone();
+    tall_only.trees.retain(|t| t.species == 0);
+    let control = covered(&tall_only, px(0.5));
+    let steps = [(0.79, 0.81), (0.99, 1.01)].map(|(a, b)| {
+        let (x, y) = (covered(&scene, px(a)), covered(&scene, px(b)));
+        (x - y).abs() / y.max(1e-6)
+    });
+    let _ = std::fs::remove_dir_all(&cache);
+    eprintln!(
+        "covered: all drawn {all:.4}, short trees in the field {handed:.4}, short trees removed {control:.4}; steps {steps:?}"
+    );
+    assert!(
+        all - control > 0.03,
+        "the short trees must cover a visible share: {all} vs {control}"
+    );
+    assert!(
+        (handed - all).abs() <= (all - control) / 3.0,
+        "the field must take the short trees' share: {handed} (all drawn {all}, removed {control})"
+    );
+    for s in steps {
+        assert!(
+            s < 0.01,
+            "the short trees' handover must be continuous: {steps:?}"
+        );
+    }
 }

@@ -615,3 +615,83 @@ fn a_streaming_flight_pops_no_tree_and_the_audit_changes_no_pixel() {
     assert!(inserted > 0.0, "no streaming: {inserted} tiles inserted");
     assert!(drawn > 24.0 * 50.0, "{drawn}");
 }
+
+/// BN12 §4's pixel rule in a chain that ends in a forest field: each tree ends where it is
+/// `shadermap.handover_px` tall, in the GPU cull exactly as in the CPU lists (the same trees
+/// per band, triangles and picture), and fewer trees are drawn than without the rule.
+#[test]
+fn the_pixel_rule_drops_the_same_trees_on_the_cpu_and_the_gpu() {
+    let gpu = gpu();
+    let world = sylvan_scene::World {
+        tile_m: 64.0,
+        ..Default::default()
+    };
+    let mut s = forest_scene(300.0, 60.0, world);
+    s.lod_chain = vec![
+        "geometry:0-90".into(),
+        "zfield:90-400".into(),
+        "shadermap:400-".into(),
+    ];
+    let cache = std::env::temp_dir().join(format!("sylvan-pixel-rule-{}", std::process::id()));
+    let frame = |cpu_driven: bool, px: f32| {
+        let settings = [
+            "zfield.order=3",
+            "zfield.tile=32",
+            "shadermap.theta=5",
+            "shadermap.phi=3",
+            "shadermap.lambda=2",
+            "shadermap.patch_px=64",
+            &format!("shadermap.handover_px={px}"),
+        ]
+        .iter()
+        .map(|a| sylvan_scene::Setting::from_arg(a).unwrap())
+        .collect();
+        let options = RenderOptions {
+            width: 128,
+            height: 128,
+            shadow_resolution: 512,
+            cpu_driven,
+            technique: "auto".into(),
+            settings,
+            cache: sylvan_render::bake::CachePolicy::Dir(cache.clone()),
+            ..Default::default()
+        };
+        let mut r = Renderer::new(&gpu, &s, &[test_tree()], &options).expect("renderer");
+        let stats = r.render(&gpu, &s.camera, &s.sun).expect("frame");
+        let img = image::DynamicImage::ImageRgba8(r.read_image(&gpu).unwrap()).into_rgb8();
+        (img, stats)
+    };
+    // 128 px at 60°: 111 px per metre, so at 8 px the 8–12 m trees end at 111–166 m.
+    let (cpu, cpu_stats) = frame(true, 8.0);
+    let (gpu_img, gpu_stats) = frame(false, 8.0);
+    let (_, all_stats) = frame(false, 0.0);
+    let _ = std::fs::remove_dir_all(&cache);
+    let sum = |s: &sylvan_render::FrameStats| s.trees_drawn.values().sum::<u32>();
+    eprintln!(
+        "drawn: cpu {:?}, gpu {:?}, without the rule {:?}",
+        cpu_stats.trees_drawn, gpu_stats.trees_drawn, all_stats.trees_drawn
+    );
+    // (The CPU lists name the field with 0 trees; the GPU's name only what they drew.)
+    let drawn = |s: &sylvan_render::FrameStats| {
+        let mut v: Vec<(String, u32)> = s
+            .trees_drawn
+            .iter()
+            .filter(|(_, n)| **n > 0)
+            .map(|(k, n)| (k.clone(), *n))
+            .collect();
+        v.sort();
+        v
+    };
+    assert_eq!(drawn(&gpu_stats), drawn(&cpu_stats));
+    assert_eq!(gpu_stats.triangles, cpu_stats.triangles);
+    assert_eq!(gpu_stats.shadow_triangles, cpu_stats.shadow_triangles);
+    assert!(
+        sum(&gpu_stats) + 20 < sum(&all_stats),
+        "the rule must drop the far trees: {} vs {}",
+        sum(&gpu_stats),
+        sum(&all_stats)
+    );
+    let f = sylvan_eval::flip(&cpu, &gpu_img).unwrap();
+    eprintln!("FLIP cpu vs gpu {:.4}", f.mean);
+    assert!(f.mean <= 0.005, "FLIP {}", f.mean);
+}

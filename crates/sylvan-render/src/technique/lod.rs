@@ -14,7 +14,10 @@
 
 use super::params::{self, NoParams};
 use super::registry::{self, Entry, Kind};
-use super::{BandRange, BuildContext, Built, DrawContext, DrawCounts, FrameInput, Technique};
+use super::shadermap::field::ForestField;
+use super::{
+    BandRange, BuildContext, Built, DrawContext, DrawCounts, FieldEnd, FrameInput, Technique,
+};
 use crate::RenderError;
 use crate::instances::{GpuTreeInstance, Instances};
 use glam::Vec3;
@@ -185,24 +188,25 @@ pub fn parse_chain(entries: &[String]) -> Result<Vec<Band>, RenderError> {
 }
 
 /// Band `i`'s distance range and fades: ±[`FADE`] of each inner boundary, except before a
-/// forest field, where the band fades over `[0.8, 1] × s_max` (BN12 §7, `s_max` the field's
-/// start) — or, with `self_fading` (its technique fades itself, [`Technique::fades_to_field`]),
-/// stops at `s_max`.
-pub fn band_range(bands: &[Band], i: usize, self_fading: bool) -> BandRange {
+/// forest field, where the band stops at the field's start `s_max`; in a chain that ends in a
+/// field every band's trees end by [`FieldEnd`] (BN12 §7: over `[0.8, 1]` of each tree's own
+/// end, `s_max` or where the tree is `handover_px` tall; or stopping there when its technique
+/// fades itself, `self_fading`, [`Technique::fades_to_field`]).
+pub fn band_range(bands: &[Band], i: usize, self_fading: bool, handover_px: f32) -> BandRange {
     let b = &bands[i];
     let before_field = bands.get(i + 1).is_some_and(|n| is_field(n.technique));
+    let field = bands.last().filter(|l| is_field(l.technique));
     BandRange {
         start: b.start,
         end: b.end,
-        end_fade: before_field.then_some(match self_fading {
-            true => [b.end, b.end],
-            false => [FIELD_FADE_START * b.end, b.end],
+        end_fade: before_field.then_some([b.end, b.end]),
+        field_end: field.map(|f| FieldEnd {
+            s_max: f.start,
+            handover_px,
+            self_fading,
         }),
     }
 }
-
-/// Where the trees before a forest field start fading, relative to its start (BN12 §7).
-pub const FIELD_FADE_START: f32 = 0.8;
 
 /// Presence of band `i` for a tree at `distance`: 1 inside the band, cross-fading over ±FADE
 /// of each inner boundary; the presences of all bands sum to 1. A forest field lists no
@@ -212,7 +216,7 @@ pub fn presence(bands: &[Band], i: usize, distance: f32) -> f32 {
     if is_field(bands[i].technique) {
         return 0.0;
     }
-    band_range(bands, i, false).presence(distance)
+    band_range(bands, i, false, 0.0).tree_presence(distance, 0.0, 0.0)
 }
 
 /// Whether every band of `scene`'s chain is GPU-driven (then the chain is).
@@ -259,12 +263,18 @@ pub(crate) fn split(
     ranges: &[Option<BandRange>],
     lists: &mut [Instances],
     master: &Instances,
-    eye: Vec3,
+    view: (Vec3, f32),
+    tops: &[f32],
 ) {
+    let (eye, pixels_per_metre) = view;
     for (range, list) in ranges.iter().zip(lists.iter_mut()) {
-        list.fill_from(gpu, master, |r: &GpuTreeInstance| {
+        let k = range
+            .and_then(|r| r.field_end)
+            .map_or(0.0, |f| f.per_height(pixels_per_metre));
+        list.fill_from(gpu, master, |r: &GpuTreeInstance, species| {
             let d = Vec3::new(r.base_scale[0], r.base_scale[1], r.base_scale[2]).distance(eye);
-            range.map_or(0.0, |b| b.presence(d))
+            let height = tops.get(species).copied().unwrap_or(0.0) * r.base_scale[3];
+            range.map_or(0.0, |b| b.tree_presence(d, height, k))
         });
     }
 }
@@ -288,8 +298,10 @@ pub const ENTRY: Entry = Entry {
 pub struct Chain {
     /// Each band's range and fades as built (`None`: the forest field, listing no trees).
     ranges: Vec<Option<BandRange>>,
+    /// Each species' model top (plant units): a tree's height is it times the tree's scale.
+    tops: Vec<f32>,
     /// The forest field of the last band, when the chain ends in one.
-    field: Option<super::shadermap::field::ForestField>,
+    field: Option<ForestField>,
     techniques: Vec<Box<dyn Technique>>,
     lists: Vec<Instances>,
     /// Each band's technique's own list windows (those of its `list_requests`, fixed at
@@ -323,9 +335,10 @@ impl Chain {
         for i in order {
             let band = &bands[i];
             let settings = &settings_of[i];
+            let handover_px = field.as_ref().map_or(0.0, |f: &ForestField| f.handover_px);
             let range = match Some(i) == field_band {
                 true => BandRange::new(band.start, band.end),
-                false => band_range(&bands, i, false),
+                false => band_range(&bands, i, false, handover_px),
             };
             let mut sub = BuildContext {
                 gpu: cx.gpu,
@@ -345,7 +358,8 @@ impl Chain {
             if Some(i) == field_band {
                 field = built.technique.field().cloned();
             } else {
-                ranges[i] = Some(band_range(&bands, i, built.technique.fades_to_field()));
+                let own = built.technique.fades_to_field();
+                ranges[i] = Some(band_range(&bands, i, own, handover_px));
             }
             techniques[i] = Some(built.technique);
             reports.extend(built.reports);
@@ -371,9 +385,11 @@ impl Chain {
         for w in &request_windows {
             firsts.push(firsts.last().copied().unwrap_or(0) + w.len());
         }
+        let tops = cx.plants.iter().map(|p| p.bbox_max[1]).collect();
         Ok(Built {
             technique: Box::new(Self {
                 ranges,
+                tops,
                 field,
                 techniques,
                 lists,
@@ -409,7 +425,8 @@ impl Technique for Chain {
             &self.ranges,
             &mut self.lists,
             input.instances,
-            input.eye,
+            (input.eye, input.pixels_per_metre),
+            &self.tops,
         );
         for (i, (t, list)) in self.techniques.iter_mut().zip(&self.lists).enumerate() {
             let sub = FrameInput {
@@ -462,8 +479,10 @@ impl Technique for Chain {
             .enumerate()
             .flat_map(|(i, t)| {
                 let window = self.band_window(i);
+                let field_end = self.ranges[i].and_then(|r| r.field_end);
                 t.list_requests().into_iter().map(move |mut r| {
                     r.window = crate::world::intersect_windows(r.window, window);
+                    r.field_end = field_end;
                     r
                 })
             })
@@ -589,14 +608,43 @@ mod tests {
         }
         // The trees before the field fade over [0.8, 1] of its start (BN12 §7), unless their
         // technique fades itself (then they stop at the start); the field lists no trees.
-        let fading = band_range(&b, 0, false);
-        assert_eq!(fading.presence(399.0), 1.0);
-        assert!((fading.presence(450.0) - 0.5).abs() < 1e-6);
-        assert_eq!(fading.presence(500.0), 0.0);
-        let own = band_range(&b, 0, true);
-        assert_eq!(own.presence(499.0), 1.0);
-        assert_eq!(own.presence(500.0), 0.0);
+        let fading = band_range(&b, 0, false, 0.0);
+        assert_eq!(fading.tree_presence(399.0, 10.0, 0.0), 1.0);
+        assert!((fading.tree_presence(450.0, 10.0, 0.0) - 0.5).abs() < 1e-6);
+        assert_eq!(fading.tree_presence(500.0, 10.0, 0.0), 0.0);
+        let own = band_range(&b, 0, true, 0.0);
+        assert_eq!(own.tree_presence(499.0, 10.0, 0.0), 1.0);
+        assert_eq!(own.tree_presence(500.0, 10.0, 0.0), 0.0);
         assert_eq!(presence(&b, 1, 2000.0), 0.0);
+    }
+
+    #[test]
+    fn each_tree_ends_where_it_is_handover_px_tall() {
+        // BN12 §4's 3-px rule: at 100 px per metre and 5 px, a tree ends at 20 × its height
+        // (a 10 m tree at 200 m, fading over [160, 200] m), never beyond the field's start;
+        // in every band of the chain, not only the last before the field.
+        let b = chain(&["geometry:0-100", "zfield:100-500", "shadermap:500-"]).unwrap();
+        let last = band_range(&b, 1, false, 5.0);
+        let k = last.field_end.unwrap().per_height(100.0);
+        assert_eq!(k, 20.0);
+        assert_eq!(last.tree_presence(159.0, 10.0, k), 1.0);
+        assert!((last.tree_presence(180.0, 10.0, k) - 0.5).abs() < 1e-6);
+        assert_eq!(last.tree_presence(200.0, 10.0, k), 0.0);
+        assert!((last.tree_presence(450.0, 30.0, k) - 0.5).abs() < 1e-6);
+        // Self-fading (zfield fades its own opacity): presence stops at the tree's end.
+        let own = band_range(&b, 1, true, 5.0);
+        assert_eq!(own.tree_presence(199.0, 10.0, k), 1.0);
+        assert_eq!(own.tree_presence(200.0, 10.0, k), 0.0);
+        let first = band_range(&b, 0, false, 5.0);
+        assert!((first.tree_presence(36.0, 2.0, k) - 0.5).abs() < 1e-6);
+        assert_eq!(first.tree_presence(36.0, 10.0, k), 1.0);
+        // Without the rule (0 px) every tree ends at s_max.
+        let off = band_range(&b, 1, false, 0.0);
+        let k0 = off.field_end.unwrap().per_height(100.0);
+        assert_eq!(off.tree_presence(300.0, 1.0, k0), 1.0);
+        // A chain without a field has no per-tree end.
+        let plain = chain(&["geometry:0-100", "zfield:100-"]).unwrap();
+        assert_eq!(band_range(&plain, 1, false, 5.0).field_end, None);
     }
 
     #[test]

@@ -58,9 +58,74 @@ pub struct BandRange {
     /// End distance (metres, `f32::INFINITY` for an open end).
     pub end: f32,
     /// Where the band's presence falls to 0, when it is not ±[`lod::FADE`] of `end`: the band
-    /// before a forest field fades over `[0.8, 1] × end` (BN12 §7), or stops at `end` when its
-    /// technique fades itself into the field ([`Technique::fades_to_field`]).
+    /// before a forest field stops at `end` (the field's start), its trees ending by
+    /// [`BandRange::field_end`].
     pub end_fade: Option<[f32; 2]>,
+    /// In a chain that ends in a forest field: how each tree of the band ends into it.
+    pub field_end: Option<FieldEnd>,
+}
+
+/// How the trees of a chain that ends in a forest field end (BN12 §7, and §4's "trees under
+/// 3 px are never drawn"): each tree has its own end `e = min(s_max, h · ppm / handover_px)`
+/// (its height `h` in metres, `ppm` the output's pixels per metre at one metre), and fades
+/// over `[0.8, 1] × e` (or stops at `e` when its technique fades itself,
+/// [`Technique::fades_to_field`]) while the field takes its share.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FieldEnd {
+    /// The field's start (metres): no tree is drawn beyond it.
+    pub s_max: f32,
+    /// The apparent height (pixels) under which a tree is left to the field (0: every tree
+    /// is drawn to `s_max`).
+    pub handover_px: f32,
+    /// The technique fades its own trees ([`Technique::fades_to_field`]): presence stops at
+    /// the tree's end.
+    pub self_fading: bool,
+}
+
+impl FieldEnd {
+    /// Where the trees' fade starts, relative to their end (BN12 §7's 0.8).
+    pub const FADE_START: f32 = 0.8;
+
+    /// Metres of distance per metre of tree height at which a tree is `handover_px` tall in
+    /// an output of `pixels_per_metre` (0: no pixel rule). The GPU cull takes the same
+    /// factor, so CPU and GPU lists agree to the bit.
+    pub fn per_height(&self, pixels_per_metre: f32) -> f32 {
+        if self.handover_px > 0.0 {
+            pixels_per_metre / self.handover_px
+        } else {
+            0.0
+        }
+    }
+
+    /// The end of a tree `height_m` tall, for [`FieldEnd::per_height`] `k`.
+    pub fn tree_end(&self, height_m: f32, k: f32) -> f32 {
+        if k > 0.0 {
+            self.s_max.min(height_m * k)
+        } else {
+            self.s_max
+        }
+    }
+
+    /// The presence factor of a tree `height_m` tall at `distance` (trunk base), for
+    /// [`FieldEnd::per_height`] `k` (as `cull.wgsl` computes it).
+    pub fn presence(&self, distance: f32, height_m: f32, k: f32) -> f32 {
+        let e = self.tree_end(height_m, k);
+        if self.self_fading {
+            if distance >= e { 0.0 } else { 1.0 }
+        } else {
+            1.0 - common::smoothstep(Self::FADE_START * e, e, distance)
+        }
+    }
+
+    /// The row the GPU cull takes: x [`FieldEnd::per_height`], y `s_max`, z 1 when self-fading.
+    pub fn gpu_row(&self, pixels_per_metre: f32) -> [f32; 4] {
+        [
+            self.per_height(pixels_per_metre),
+            self.s_max,
+            if self.self_fading { 1.0 } else { 0.0 },
+            0.0,
+        ]
+    }
 }
 
 impl BandRange {
@@ -69,6 +134,7 @@ impl BandRange {
         start: 0.0,
         end: f32::INFINITY,
         end_fade: None,
+        field_end: None,
     };
 
     /// `start..end` with the chain's usual cross-fades.
@@ -77,6 +143,7 @@ impl BandRange {
             start,
             end,
             end_fade: None,
+            field_end: None,
         }
     }
 
@@ -101,10 +168,20 @@ impl BandRange {
     }
 
     /// The presence of a tree at `distance` under [`BandRange::window`] (as `cull.wgsl`'s
-    /// `ramp` computes it on the GPU).
+    /// `ramp` computes it on the GPU), without the field's per-tree end.
     pub fn presence(&self, distance: f32) -> f32 {
         let [a, b, c, d] = self.window();
         common::smoothstep(a, b, distance) * (1.0 - common::smoothstep(c, d, distance))
+    }
+
+    /// [`BandRange::presence`] times the field's end ([`FieldEnd::presence`]) for a tree
+    /// `height_m` tall, `k` its [`FieldEnd::per_height`].
+    pub fn tree_presence(&self, distance: f32, height_m: f32, k: f32) -> f32 {
+        let p = self.presence(distance);
+        match self.field_end {
+            Some(f) if p > 0.0 => p * f.presence(distance, height_m, k),
+            _ => p,
+        }
     }
 }
 
@@ -255,6 +332,7 @@ pub trait Technique: Send {
             layout: self.list_layout(),
             draws: self.indirect_draws(),
             window: crate::world::ListRequest::ALL,
+            field_end: None,
         }]
     }
     /// This frame's window per [`Technique::list_requests`] entry, for a technique whose

@@ -53,6 +53,9 @@ pub struct ListRequest {
     /// Presence by distance from the eye to the trunk base: rises over `[w0, w1]` and falls
     /// over `[w2, w3]` (an equal pair is a step); [`ListRequest::ALL`] for every distance.
     pub window: [f32; 4],
+    /// In a chain that ends in a forest field: how each tree ends into it (its own distance,
+    /// by its height in pixels; set by the chain).
+    pub field_end: Option<crate::technique::FieldEnd>,
 }
 
 impl ListRequest {
@@ -159,6 +162,10 @@ struct GpuParams {
     hiz_view_proj: [[f32; 4]; 4],
     hiz_info: [f32; 4],
     hiz_offsets: [[u32; 4]; super::hiz::MAX_LEVELS / 4],
+    /// The request's [`crate::technique::FieldEnd::gpu_row`] (zero: no field).
+    field_end: [f32; 4],
+    /// Per species its model top (plant units; 4 a row): a tree's height is it × its scale.
+    tops: [[f32; 4]; MAX_SPECIES / 4],
 }
 
 /// What one frame culls.
@@ -185,6 +192,9 @@ pub(crate) struct FrameCull<'a> {
     pub pyramid: &'a super::hiz::PyramidUse<'a>,
     /// The pop audit's per-slot presence buffer, and whether it is on (else a placeholder).
     pub audit: (&'a wgpu::Buffer, bool),
+    /// How the request's trees end into a forest field
+    /// ([`crate::technique::FieldEnd::gpu_row`]; zero: no field).
+    pub field_end: [f32; 4],
 }
 
 /// The last frame's lists, as the techniques draw them.
@@ -248,6 +258,7 @@ pub(crate) struct Cull {
     args_pipeline: wgpu::ComputePipeline,
     params: wgpu::Buffer,
     species_spheres: [[f32; 4]; MAX_SPECIES],
+    tops: [[f32; 4]; MAX_SPECIES / 4],
     layout_of_lists: ListLayout,
     groups: usize,
     sort_scan: wgpu::ComputePipeline,
@@ -375,6 +386,10 @@ impl Cull {
             let c = (b.min + b.max) * 0.5;
             *s = [c.x, c.y, c.z, (b.max - b.min).length() * 0.5];
         }
+        let mut tops = [[0.0; 4]; MAX_SPECIES / 4];
+        for (s, b) in bounds.iter().enumerate() {
+            tops[s / 4][s % 4] = b.max.y;
+        }
         let groups = if list_layout.per_species {
             bounds.len().max(1)
         } else {
@@ -398,6 +413,7 @@ impl Cull {
                 mapped_at_creation: false,
             }),
             species_spheres,
+            tops,
             runs: Storage::new(gpu, "cull_runs", u, 4096),
             lists: Storage::new(gpu, "cull_lists", u, n_lists as u64 * 8),
             counters: Storage::new(
@@ -551,6 +567,8 @@ impl Cull {
             hiz_view_proj: f.pyramid.view_proj.to_cols_array_2d(),
             hiz_info: f.pyramid.info,
             hiz_offsets: f.pyramid.offsets,
+            field_end: f.field_end,
+            tops: self.tops,
         };
         for (p, frustum) in f.frustums.iter().enumerate() {
             if let Some(fr) = frustum {

@@ -68,6 +68,13 @@ struct Params {
     hiz_info: vec4<f32>,
     // level L's x offset in its texture at [L / 4][L % 4]
     hiz_offsets: array<vec4<u32>, 4>,
+    // How this request's trees end into a forest field (technique/mod.rs `FieldEnd`):
+    // x metres of distance per metre of height at which a tree is `handover_px` tall (0: no
+    // pixel rule), y the field's start s_max (0: no field), z 1 when the technique fades its
+    // own trees (presence stops at the tree's end), else presence falls over [0.8, 1] × it.
+    field_end: vec4<f32>,
+    // per species its model top at [s / 4][s % 4] (a tree's height is it × its scale)
+    tops: array<vec4<f32>, 16>,
 }
 
 const PASSES: u32 = 5u;
@@ -200,6 +207,19 @@ fn ramp(e0: f32, e1: f32, x: f32) -> f32 {
     return smoothstep(e0, e1, x);
 }
 
+// BN12 §7 and §4's 3-px rule (`FieldEnd::presence`): a tree `height` metres tall at `d` ends at
+// min(s_max, height × k), fading over [0.8, 1] of it (or stopping there).
+fn field_end_presence(height: f32, d: f32) -> f32 {
+    var e = params.field_end.y;
+    if (params.field_end.x > 0.0) {
+        e = min(e, height * params.field_end.x);
+    }
+    if (params.field_end.z > 0.5) {
+        return select(1.0, 0.0, d >= e);
+    }
+    return 1.0 - ramp(0.8 * e, e, d);
+}
+
 fn list_count() -> u32 {
     return PASSES * params.info.x;
 }
@@ -248,6 +268,9 @@ fn cull(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) l
     let base_distance = distance(t.base_scale.xyz, params.eye_far.xyz);
     presence *= ramp(params.band.x, params.band.y, base_distance)
         * (1.0 - ramp(params.band.z, params.band.w, base_distance));
+    if (presence > 0.0 && params.field_end.y > 0.0) {
+        presence *= field_end_presence(params.tops[species / 4u][species % 4u] * s, base_distance);
+    }
     if (presence <= 0.0) {
         return;
     }

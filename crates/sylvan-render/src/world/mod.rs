@@ -32,7 +32,7 @@ mod pops;
 mod produce;
 mod seed;
 
-pub use cull::{Culled, IndirectDraw, ListLayout, ListRequest, intersect_windows};
+pub use cull::{Culled, IndirectDraw, ListLayout, ListRequest, MAX_SPECIES, intersect_windows};
 pub use hiz::MAX_MOVE_M as OCCLUSION_MAX_MOVE_M;
 
 use crate::RenderError;
@@ -133,6 +133,9 @@ pub(crate) struct WorldView<'a> {
     /// With shadows: which casters each cascade needs (the same test the GPU cull makes per
     /// tree, here per tile).
     pub casters: Option<&'a CasterCull>,
+    /// The output's pixels per metre at one metre (a tree's apparent height, for the
+    /// field's per-tree end: [`crate::technique::FieldEnd`]).
+    pub pixels_per_metre: f32,
 }
 
 /// What the world did in the last frame.
@@ -799,6 +802,9 @@ impl World {
                     draws: &request.draws,
                     pyramid: &pyramid,
                     audit,
+                    field_end: request
+                        .field_end
+                        .map_or([0.0; 4], |e| e.gpu_row(view.pixels_per_metre)),
                 },
             )?;
             self.runs_scratch = runs;

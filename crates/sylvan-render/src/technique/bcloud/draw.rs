@@ -741,7 +741,7 @@ impl Technique for BillboardCloud {
         for (l, list) in self.lists.iter_mut().enumerate() {
             let w = self.windows[l];
             let eye = input.eye;
-            list.fill_from(gpu, input.instances, |r: &GpuTreeInstance| {
+            list.fill_from(gpu, input.instances, |r: &GpuTreeInstance, _| {
                 let d = Vec3::from_slice(&r.base_scale[..3]).distance(eye);
                 smoothstep(w[0], w[1], d) * (1.0 - smoothstep(w[2], w[3], d))
             });
@@ -803,6 +803,7 @@ impl Technique for BillboardCloud {
                     })
                     .collect(),
                 window: self.composed(self.windows[l]),
+                field_end: None,
             })
             .collect()
     }

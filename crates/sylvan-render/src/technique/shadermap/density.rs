@@ -25,6 +25,10 @@
 //! colour — a stand of pale birches among dark pines stays pale to the horizon — instead of
 //! the mix's mean ρ̄ everywhere ([`DensityRaster::mean_albedo`] is the terrain's mean, which
 //! the field scales to ρ̄).
+//!
+//! **Per species** ([`DensityRaster::species`]): Λⁱ E[h²] per texel, so the field can weigh
+//! each species' own handover by the crown area it shows (BN12 §4's 3-px rule ends a bush long
+//! before a pine: `FieldEnd`).
 
 use sylvan_plant::Plant;
 use sylvan_scene::Scene;
@@ -74,6 +78,16 @@ pub struct DensityRaster {
     /// Per texel [Λ_h (trees per m²), Σ Λⁱ aⁱ, Σ Λⁱ sⁱ (m² of crown per m²), Σ Λⁱ aⁱ ρⁱ
     /// (red, green, blue)], row-major.
     pub texels: Vec<[f32; CHANNELS]>,
+    /// Per species (as the plants), per texel: Λⁱ E[h²] (m² of tree height² per m²), the
+    /// species' share of the crown areas (its top area is this × its [`CrownShape::top`]) —
+    /// what the field weighs each species' own handover by (BN12 keeps a density channel per
+    /// species).
+    pub species: Vec<Vec<f32>>,
+    /// Per species its trees' root-mean-square height (metres; 0 without trees): the height
+    /// the field's per-species handover takes (`FieldEnd`'s pixel rule).
+    pub heights: Vec<f32>,
+    /// Per species its [`CrownShape`].
+    pub shapes: Vec<CrownShape>,
 }
 
 impl DensityRaster {
@@ -107,12 +121,20 @@ impl DensityRaster {
         };
         let [nx, nz] = resolution.map(|n| n as usize);
         let mut texels = vec![[0.0f32; CHANNELS]; nx * nz];
+        let mut species = vec![vec![0.0f32; nx * nz]; plants.len()];
+        // Per species: trees and Σ h² over the terrain (for the rms height).
+        let mut totals = vec![[0.0f64; 2]; plants.len()];
         if !scene.trees.is_empty() {
             let cell_m2 = (size[0] / nx as f32) * (size[1] / nz as f32);
             for t in &scene.trees {
                 let cx = ((t.position.x / size[0] * nx as f32).max(0.0) as usize).min(nx - 1);
                 let cz = ((t.position.z / size[1] * nz as f32).max(0.0) as usize).min(nz - 1);
                 let (c, h2) = (shape(t.species), t.height * t.height);
+                if let Some(q) = species.get_mut(t.species as usize) {
+                    q[cz * nx + cx] += h2 / cell_m2;
+                    totals[t.species as usize][0] += 1.0;
+                    totals[t.species as usize][1] += h2 as f64;
+                }
                 let v = &mut texels[cz * nx + cx];
                 v[0] += 1.0 / cell_m2;
                 v[1] += c.top * h2 / cell_m2;
@@ -122,7 +144,12 @@ impl DensityRaster {
                 }
             }
             texels = tent(&texels, nx, nz);
+            for q in &mut species {
+                let one: Vec<[f32; 1]> = q.iter().map(|&v| [v]).collect();
+                *q = tent(&one, nx, nz).into_iter().map(|[v]| v).collect();
+            }
         }
+        let texel_m2 = (size[0] / nx as f32) as f64 * (size[1] / nz as f32) as f64;
         for (i, v) in texels.iter_mut().enumerate() {
             let x = ((i % nx) as f32 + 0.5) / nx as f32 * size[0];
             let z = ((i / nx) as f32 + 0.5) / nz as f32 * size[1];
@@ -132,6 +159,11 @@ impl DensityRaster {
                 // E[h²] over the layout's uniform heights.
                 let h2 = (h0 * h0 + h0 * h1 + h1 * h1) / 3.0;
                 let c = shape(l.species);
+                if let Some(q) = species.get_mut(l.species as usize) {
+                    q[i] += d * h2;
+                    totals[l.species as usize][0] += d as f64 * texel_m2;
+                    totals[l.species as usize][1] += (d * h2) as f64 * texel_m2;
+                }
                 v[0] += d;
                 v[1] += d * c.top * h2;
                 v[2] += d * c.side * h2;
@@ -140,10 +172,17 @@ impl DensityRaster {
                 }
             }
         }
+        let heights = totals
+            .iter()
+            .map(|&[n, h2]| if n > 0.0 { (h2 / n).sqrt() as f32 } else { 0.0 })
+            .collect();
         Self {
             resolution,
             size_m: size,
             texels,
+            species,
+            heights,
+            shapes,
         }
     }
 

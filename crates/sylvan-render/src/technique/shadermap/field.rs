@@ -20,7 +20,11 @@ struct GpuFieldParams {
     light: [f32; 4],
     handover: [f32; 4],
     sky: [f32; 4],
+    species: [[f32; 4]; MAX_SPECIES],
 }
+
+/// Most species the field weighs per-species handovers for (as the GPU cull holds).
+pub const MAX_SPECIES: usize = crate::world::MAX_SPECIES;
 
 /// Where and how the field takes over from the trees (BN12 §7).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -33,6 +37,10 @@ pub struct Handover {
     /// The trees fade over [0.8, 1] × s_max while the ground takes their share (eq. 26–27);
     /// `false`: a hard switch at s_max (a negative control for popping).
     pub fade: bool,
+    /// A tree shorter than this on screen (pixels) is left to the field (BN12 §4's 3 px):
+    /// each tree ends at min(s_max, its height × pixels per metre / this), the field taking
+    /// each species' share from its own end; 0: every tree is drawn to s_max.
+    pub handover_px: f32,
 }
 
 /// The field's GPU resources: group 1 of the terrain's forest pipeline, group 2 of the
@@ -48,6 +56,8 @@ pub struct ForestField {
     pub bind: wgpu::BindGroup,
     /// GPU bytes.
     pub bytes: u64,
+    /// [`Handover::handover_px`].
+    pub handover_px: f32,
 }
 
 impl ForestField {
@@ -99,11 +109,30 @@ impl ForestField {
                 0,
             ]
         }));
+        // Layers 2…: per species Λⁱ E[h²] over its peak, four species a layer.
+        let n_species = density.species.len().min(MAX_SPECIES);
+        let species_peaks: Vec<f32> = density.species[..n_species]
+            .iter()
+            .map(|q| q.iter().fold(0.0f32, |a, &v| a.max(v)))
+            .collect();
+        for layer in 0..n_species.div_ceil(4) {
+            bits.extend((0..density.texels.len()).flat_map(|t| {
+                let at = |k: usize| {
+                    let i = 4 * layer + k;
+                    match species_peaks.get(i) {
+                        Some(&p) if p > 0.0 => f32_to_f16(density.species[i][t] / p),
+                        _ => 0,
+                    }
+                };
+                [at(0), at(1), at(2), at(3)]
+            }));
+        }
         let [w, h] = density.resolution;
+        let layers = 2 + n_species.div_ceil(4) as u32;
         let raster = crate::texture::upload_raw(
             gpu,
             "shadermap_density",
-            [w, h, 2],
+            [w, h, layers],
             wgpu::TextureDimension::D2,
             wgpu::TextureFormat::Rgba16Float,
             bytemuck::cast_slice(&bits),
@@ -139,9 +168,17 @@ impl ForestField {
                 handover.s_max.max(0.0),
                 handover.nu.map_or(-1.0, |n| n.clamp(0.0, 1.0)),
                 if handover.fade { 1.0 } else { 0.0 },
-                0.0,
+                handover.handover_px.max(0.0),
             ],
-            sky: [draw.sky_normal_weight, 0.0, 0.0, 0.0],
+            sky: [draw.sky_normal_weight, n_species as f32, 0.0, 0.0],
+            species: {
+                let mut rows = [[0.0; 4]; MAX_SPECIES];
+                for (i, row) in rows.iter_mut().enumerate().take(n_species) {
+                    let (shape, peak) = (density.shapes[i], species_peaks[i]);
+                    *row = [shape.top * peak, shape.side * peak, density.heights[i], 0.0];
+                }
+                rows
+            },
         };
         let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("shadermap_field_params"),
@@ -157,6 +194,7 @@ impl ForestField {
             layout,
             bind,
             bytes: t.bytes + buffer.size() + bits.len() as u64 * 2,
+            handover_px: handover.handover_px.max(0.0),
         })
     }
 }

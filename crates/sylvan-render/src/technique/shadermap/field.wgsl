@@ -17,6 +17,8 @@
 //
 // Eq. 24–25: Ĩ_g = (1 − ν) I_g + ν Ī_g 𝔾/Gd, J̃_g = (1 − ν) J_g + ν J̄_g, with eq. 12's
 // J_g = J̄_g Δ (δ_g from 𝔻, as eq. 18) and J̄_g the sky × 𝔻 (eq. 19).
+// ν and w are each species' own, weighed by its crown area there (`field_handover_at`: a
+// species ends where its trees are `handover_px` tall, or at s_max).
 // Eq. 26–27, mean-preserving (a deviation): the trees drawn over this pixel cover c (1 − w)
 // of it on average (c = 1 − Gd, their opacity × (1 − w)), so the ground shows the trees' mean
 // with μ = c w / (1 − c (1 − w)), which makes the pixel's tree share exactly c at every w
@@ -25,7 +27,7 @@
 fn forest_radiance(xz: vec2<f32>, n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, ground: vec3<f32>, vis: f32, s: f32, contrast: f32) -> vec3<f32> {
     let ndl = max(dot(n, l), 0.0);
     let t = forest_terms(xz, v, l, n);
-    let h = field_handover(s);
+    let h = field_handover_at(xz, s, dot(v, n));
     let sun_open = ground * frame.sun_color.rgb * ndl;
     let sun_g = sun_open * vis;
     let sky_g = ground * sky_light(n);
@@ -55,7 +57,7 @@ fn fs_terrain_forest(in: TerrainOut) -> @location(0) vec4<f32> {
     let vis = select(sun_visibility(in.world, n * 0.15), 0.0, dot(n, l) <= 0.0);
     let s = distance(frame.camera.xyz, in.world);
     if (debug_mode() == DEBUG_COVERAGE) {
-        let share = field_tree_share(forest_terms(in.world.xz, v, l, n), field_handover(s).y);
+        let share = field_tree_share(forest_terms(in.world.xz, v, l, n), field_handover_at(in.world.xz, s, dot(v, n)).y);
         return vec4<f32>(target_output(vec3<f32>(share)), 1.0);
     }
     let lit = forest_radiance(in.world.xz, n, v, l, ground, vis, s, ground_contrast(in.world));

@@ -17,10 +17,15 @@ struct FieldParams {
     light: vec4<f32>,
     // x: s_max, where the field takes over from the trees (m; 0: the field everywhere, no
     // trees); y: ν forced (< 0: BN12's smoothstep(0, 0.8, s/s_max)); z: the §7 handover
-    // (1) or a hard switch at s_max (0).
+    // (1) or a hard switch at s_max (0); w: `handover_px`, the apparent height under which a
+    // tree is left to the field (0: none).
     handover: vec4<f32>,
-    // x: `zfield.sky_normal_weight` (the trees' sky blended towards what their normals see).
+    // x: `zfield.sky_normal_weight` (the trees' sky blended towards what their normals see);
+    // y: the species with a density layer (layers 2…, four a layer).
     sky: vec4<f32>,
+    // Per species: x, y its top and side crown areas per m² of h² times its layer's scale
+    // (so a layer texel times them is Λⁱ aⁱ, Λⁱ sⁱ), z its rms height (m).
+    species: array<vec4<f32>, 64>,
 };
 
 @group(FIELD) @binding(0) var<uniform> field: FieldParams;
@@ -149,6 +154,59 @@ fn field_sun_visibility(vis: f32, s: f32) -> f32 {
         return vis;
     }
     return mix(1.0, vis, smoothstep(smax, 1.1 * smax, s));
+}
+
+// The end of a tree `height` metres tall (BN12 §4's 3-px rule, `FieldEnd::tree_end`):
+// min(s_max, where it is `handover_px` tall in the output).
+fn field_tree_end(height: f32) -> f32 {
+    let smax = field.handover.x;
+    if (field.handover.w <= 0.0) {
+        return smax;
+    }
+    return min(smax, height * (frame.shadow_params.w / field.handover.w));
+}
+
+// `field_handover` for trees that end at `e` (a tree's own, or a species' end).
+fn field_handover_to(s: f32, e: f32) -> vec2<f32> {
+    if (field.handover.x <= 0.0) {
+        return vec2<f32>(1.0, 1.0);
+    }
+    let t = s / max(e, 1e-6);
+    let nu = select(smoothstep(0.0, 0.8, t), field.handover.y, field.handover.y >= 0.0);
+    let w = select(select(0.0, 1.0, t >= 1.0), smoothstep(0.8, 1.0, t), field.handover.z > 0.5);
+    return vec2<f32>(nu, w);
+}
+
+// The ground's `field_handover` at ground point `xz`, distance `s`, seen at `cos_v` from the
+// zenith: each species ends at its own distance (`field_tree_end` of its rms height), so ν and
+// w are the species' own, weighed by the crown area each shows along the view there (layers
+// 2… of the raster). Trees that all end at s_max (no pixel rule, or every species taller than
+// `handover_px` there) give `field_handover(s)`.
+fn field_handover_at(xz: vec2<f32>, s: f32, cos_v: f32) -> vec2<f32> {
+    let smax = field.handover.x;
+    let n = u32(field.sky.y);
+    if (smax <= 0.0 || s >= smax || field.handover.w <= 0.0 || n == 0u) {
+        return field_handover(s);
+    }
+    let uv = xz * field.density.yz;
+    let c = clamp(cos_v, 0.0, 1.0);
+    let side = sqrt(1.0 - c * c) * 2.0 / table_info.shape.x;
+    var texel = vec4<f32>(0.0);
+    var sum = 0.0;
+    var acc = vec2<f32>(0.0);
+    for (var i = 0u; i < n; i++) {
+        if (i % 4u == 0u) {
+            texel = textureSampleLevel(field_density_map, table_sampler, uv, 2u + i / 4u, 0.0);
+        }
+        let sp = field.species[i];
+        let weight = texel[i % 4u] * (sp.x * c + sp.y * side);
+        acc += weight * field_handover_to(s, field_tree_end(sp.z));
+        sum += weight;
+    }
+    if (sum <= 0.0) {
+        return field_handover(s);
+    }
+    return acc / sum;
 }
 
 // BN12 §7 at distance `s`: x = ν of eq. 22–25 (smoothstep(0, 0.8, s/s_max), or forced), y =

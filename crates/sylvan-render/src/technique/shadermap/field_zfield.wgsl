@@ -11,10 +11,10 @@
 // and what the crowns show at the band's grazing views is darker. `albedo` is unused (kept so
 // the signature matches `field_none.wgsl`'s). `vis` is the cascades' sun
 // visibility at the tree point's light entry (the mean terms take none nearer than s_max:
-// `field_sun_visibility`).
-fn field_tree_light(sun: vec3<f32>, sky: vec3<f32>, albedo: vec3<f32>, world: vec3<f32>, v: vec3<f32>, l: vec3<f32>, vis: f32) -> vec3<f32> {
+// `field_sun_visibility`); `height` the tree's (metres: ν goes by its own end).
+fn field_tree_light(sun: vec3<f32>, sky: vec3<f32>, albedo: vec3<f32>, world: vec3<f32>, v: vec3<f32>, l: vec3<f32>, vis: f32, height: f32) -> vec3<f32> {
     let s = distance(frame.camera.xyz, world);
-    let nu = field_handover(s).x;
+    let nu = field_handover_to(s, field_tree_end(height)).x;
     if (nu <= 0.0) {
         return sun + sky;
     }
@@ -22,8 +22,9 @@ fn field_tree_light(sun: vec3<f32>, sky: vec3<f32>, albedo: vec3<f32>, world: ve
     return mix(sun + sky, forest_trees(t, field_tree_albedo(world.xz), v, l, field_sun_visibility(vis, s)), nu);
 }
 
-// The opacity factor of a tree whose trunk base is at `base` (§7's fade, by the tree's own
-// distance as the chain's bands go, so a tree fades as one).
-fn field_fade(base: vec3<f32>) -> f32 {
-    return 1.0 - field_handover(distance(frame.camera.xyz, base)).y;
+// The opacity factor of a tree `height` metres tall whose trunk base is at `base` (§7's fade,
+// by the tree's own distance as the chain's bands go, so a tree fades as one, over [0.8, 1] of
+// its own end: `field_tree_end`, where it is `handover_px` tall, or s_max).
+fn field_fade(base: vec3<f32>, height: f32) -> f32 {
+    return 1.0 - field_handover_to(distance(frame.camera.xyz, base), field_tree_end(height)).y;
 }

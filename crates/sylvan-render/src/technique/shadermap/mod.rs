@@ -1,8 +1,8 @@
 //! BN12's shader-map (Bruneton & Neyret, *Real-time Realistic Rendering and Lighting of
-//! Forests*, 2012), the far end of the `auto` chain — **in progress**: §6's precomputed tables
-//! and the field they shade the terrain with, drawn alone (`--technique shadermap`: the
-//! terrain carries the whole forest, no tree is drawn; it is not a band of `auto` yet).
-//! `docs/plans/shadermap.md` is the plan and says what comes next.
+//! Forests*, 2012), the far end of the `auto` chain: §6's precomputed tables and the field they
+//! shade the terrain with, drawn alone (`--technique shadermap`: the terrain carries the whole
+//! forest, no tree is drawn) or as the last band of `auto` (§7). `docs/plans/shadermap.md` is
+//! the plan and says what is left.
 //!
 //! **Built** ([`measure`], [`tables`], [`scene`]): the tables of §6 for a scene's species mix —
 //! 𝔾(θv, θl, φ, λ), the fraction of ground seen from the view that the sun also reaches
@@ -32,6 +32,14 @@
 //! share as they fade (eq. 26–27). Other per-tree bands before a field fade by presence over
 //! the same window. `shadermap.handover=false` is a hard switch; `shadermap.nu` forces ν.
 //!
+//! **Trees under 3 px are never drawn** (§4): each tree's own end is min(s_max, where it is
+//! `handover_px` tall in the output), in every band of the chain (`technique::FieldEnd`, the
+//! GPU cull and the CPU lists alike); `zfield` fades and converges by it. The ground takes each
+//! species' ν and w from that species' own end, weighed by its crown area there (the density
+//! raster's per-species layers, `field_handover_at`), so the field takes a bush's share where
+//! the bushes end while the pines are still drawn. A deviation: the ground's per-species end
+//! uses the species' rms height, the trees their own heights.
+//!
 //! **Density** ([`density`]): the field samples Λ_h(x) per pixel from a raster of the scene's
 //! density maps (summed over species) and its placed trees (binned per ≥ 25 m cell, tent
 //! smoothed), at most 512² texels whatever the terrain — a clearing is bare ground — with the
@@ -39,7 +47,7 @@
 //! that covers the view as the local species do.
 //!
 //! **Not built yet**: ℂ and quadtree coverage tiles (the ground cover, `world::cover`, is one
-//! level, near the eye), seeds on the GPU, the per-tree 3-px rule (s_max is the band's start).
+//! level, near the eye; the field's far ground uses the density raster's Λ_h).
 //!
 //! **Deviations from BN12**, each stated:
 //! - The patch is drawn unscaled and each table direction `v′` of the transformed space
@@ -153,6 +161,11 @@ pub struct ShaderMapDrawParams {
     pub handover: bool,
     /// ν of eq. 22–25 forced (0 to 1); −1: BN12's smoothstep(0, 0.8, s/s_max).
     pub nu: f32,
+    /// As the last band of `auto`: a tree shorter than this on screen (pixels) is not drawn
+    /// (BN12 §4's 3 px) — each tree ends at min(s_max, its height × the output's pixels per
+    /// metre / this) and the field takes each species' share from its own end; 0: every
+    /// tree is drawn to s_max.
+    pub handover_px: f32,
 }
 
 impl Default for ShaderMapDrawParams {
@@ -161,6 +174,7 @@ impl Default for ShaderMapDrawParams {
             density_scale: 1.0,
             handover: true,
             nu: -1.0,
+            handover_px: 3.0,
         }
     }
 }
@@ -182,6 +196,11 @@ impl ParamTable for ShaderMapDrawParams {
             unit: "",
             doc: "ν of BN12 eq. 22–25 forced (0–1: how far near trees and ground are lit with the field's means); −1: smoothstep(0, 0.8, s/s_max)",
         },
+        ParamDoc {
+            key: "handover_px",
+            unit: "px",
+            doc: "as the last band of auto: trees shorter than this on screen are left to the field (BN12's 3 px; each tree ends where it is this tall, each species handing over at its own distance); 0 draws every tree to the field's start (0–100)",
+        },
     ];
 
     fn validate(&self) -> Result<(), String> {
@@ -189,6 +208,12 @@ impl ParamTable for ShaderMapDrawParams {
             return Err(format!(
                 "shadermap density_scale {}: must be 0 to 100",
                 self.density_scale
+            ));
+        }
+        if !(0.0..=100.0).contains(&self.handover_px) {
+            return Err(format!(
+                "shadermap handover_px {}: must be 0 to 100",
+                self.handover_px
             ));
         }
         if !(self.nu == -1.0 || (0.0..=1.0).contains(&self.nu)) {
@@ -293,6 +318,7 @@ pub const ENTRY: super::registry::Entry = super::registry::Entry {
             s_max: cx.band.start,
             nu: (own.nu >= 0.0).then_some(own.nu),
             fade: own.handover,
+            handover_px: own.handover_px,
         };
         let field = field::ForestField::new(
             cx.gpu,

@@ -344,7 +344,7 @@ fn z_fragment(in: ZOut, masked: bool) -> ZFragment {
     let world = instance_to_world(pv, in.base_scale, in.rot);
     // Coverage: presence (LOD cross-fade) by optical depth, the fade into a forest field
     // (linear in opacity, by the tree's own distance: BN12 §7), then the tree's mask.
-    let a = presence_alpha(alpha_v, in.rot.w) * field_fade(in.base_scale.xyz);
+    let a = presence_alpha(alpha_v, in.rot.w) * field_fade(in.base_scale.xyz, sp.bbox_max.y * in.base_scale.w);
     if (masked && a <= mask_threshold(in.pos.xy, in.base_scale, in.rot.z)) {
         discard;
     }
@@ -371,7 +371,7 @@ fn z_fragment(in: ZOut, masked: bool) -> ZFragment {
     // The tree's own crown along the sun is its exp(−τ…) term, not the cascades' (its caster,
     // with the opacity it casts, is in the translucent sum when `shadow_opacity` is on:
     // `zp.extra.z`).
-    let own = -log(1.0 - clamp(presence_alpha(light.alpha, in.rot.w) * field_fade(in.base_scale.xyz), 0.0, 0.999)) * zp.extra.z;
+    let own = -log(1.0 - clamp(presence_alpha(light.alpha, in.rot.w) * field_fade(in.base_scale.xyz, sp.bbox_max.y * in.base_scale.w), 0.0, 0.999)) * zp.extra.z;
     let vis = sun_visibility_own(world_l, vec3<f32>(0.0), own);
     let sun = frame.sun_color.rgb * albedo * phase * exp(-tau * path_m) * hotspot(v, l) * vis;
     // Eq. 9: sky × δ_v × the cylindrical hole of the local density Λ_h(x), d below the
@@ -387,7 +387,7 @@ fn z_fragment(in: ZOut, masked: bool) -> ZFragment {
     let hole = sky_hole(d, density) * slope;
     let sky = albedo * sky_shape(n) * zp.sky.x * delta_v * hole;
     // Eq. 22–23: towards the forest field's means as the tree recedes (none without one).
-    let light_v = field_tree_light(sun, sky, albedo, world, v, l, vis);
+    let light_v = field_tree_light(sun, sky, albedo, world, v, l, vis, sp.bbox_max.y * in.base_scale.w);
     let lit = debug_tint(apply_fog(light_v, world), world, TECHNIQUE_ZFIELD);
     var out: ZFragment;
     out.color = select(vec4<f32>(lit * a, a), vec4<f32>(lit, 1.0), masked);
@@ -418,16 +418,17 @@ fn caster(in: ZOut) -> vec2<f32> {
     }
     let back = p - lm * plane_distance(sp, z.y, z.w);
     let world = instance_to_world(back, in.base_scale, in.rot);
-    let a = presence_alpha(z.w, in.rot.w) * field_fade(in.base_scale.xyz);
+    let a = presence_alpha(z.w, in.rot.w) * field_fade(in.base_scale.xyz, sp.bbox_max.y * in.base_scale.w);
     return vec2<f32>(clip_depth(world), a);
 }
 
 @fragment
 fn fs_zfield_shadow(in: ZOut) -> ShadowFragment {
     let c = caster(in);
+    let sp = z_species[in.views.w];
     // While the tree cross-fades with another technique, or into a forest field (BN12 §7),
     // its shadow fades stochastically by opacity (a threshold hashed per pixel and tree).
-    let fading = in.rot.w < 0.999 || field_fade(in.base_scale.xyz) < 0.999;
+    let fading = in.rot.w < 0.999 || field_fade(in.base_scale.xyz, sp.bbox_max.y * in.base_scale.w) < 0.999;
     let threshold = select(0.5, hash13(vec3<f32>(in.pos.xy, 3.0 + 97.0 * in.rot.z)), fading);
     if (c.y <= max(threshold, 0.004)) {
         discard;
