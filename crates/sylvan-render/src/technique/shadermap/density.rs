@@ -26,7 +26,7 @@
 //! the mix's mean ρ̄ everywhere ([`DensityRaster::mean_albedo`] is the terrain's mean, which
 //! the field scales to ρ̄).
 //!
-//! **Per species** ([`DensityRaster::species`]): Λⁱ E[h²] per texel, so the field can weigh
+//! **Per species** ([`DensityRaster::species`]): Λⁱ E(h²) per texel, so the field can weigh
 //! each species' own handover by the crown area it shows (BN12 §4's 3-px rule ends a bush long
 //! before a pine: `FieldEnd`).
 
@@ -78,7 +78,7 @@ pub struct DensityRaster {
     /// Per texel [Λ_h (trees per m²), Σ Λⁱ aⁱ, Σ Λⁱ sⁱ (m² of crown per m²), Σ Λⁱ aⁱ ρⁱ
     /// (red, green, blue)], row-major.
     pub texels: Vec<[f32; CHANNELS]>,
-    /// Per species (as the plants), per texel: Λⁱ E[h²] (m² of tree height² per m²), the
+    /// Per species (as the plants), per texel: Λⁱ E(h²) (m² of tree height² per m²), the
     /// species' share of the crown areas (its top area is this × its [`CrownShape::top`]) —
     /// what the field weighs each species' own handover by (BN12 keeps a density channel per
     /// species).

@@ -109,7 +109,7 @@ impl ForestField {
                 0,
             ]
         }));
-        // Layers 2…: per species Λⁱ E[h²] over its peak, four species a layer.
+        // Layers 2…: per species Λⁱ E(h²) over its peak, four species a layer.
         let n_species = density.species.len().min(MAX_SPECIES);
         let species_peaks: Vec<f32> = density.species[..n_species]
             .iter()
