@@ -29,6 +29,8 @@ pub struct GpuFrame {
     /// x trees per m² where no cover tile is held; y mean tree height (m); z distance where
     /// trees end (m); w the stored density's top (trees per m²).
     pub cover_extra: [f32; 4],
+    /// x the cover's texel side (m); y its mip levels.
+    pub cover_lod: [f32; 4],
 }
 
 /// A perspective view: where the eye is and what it sees.

@@ -1105,6 +1105,7 @@ impl Renderer {
             ],
             cover: self.cover.uniforms()[0],
             cover_extra: self.cover.uniforms()[1],
+            cover_lod: self.cover.uniforms()[2],
         }
     }
 }

@@ -637,3 +637,69 @@ fn the_field_takes_each_species_share_from_its_own_end() {
         );
     }
 }
+
+/// The field alone over the stand thinned to every other column of trees (along X: 14 m
+/// apart), seen from straight above, in the coverage view: the mean covered share of each
+/// 4-pixel column band of the frame's middle rows.
+fn banded_columns(gpu: &sylvan_gpu::Gpu, cover: bool) -> Vec<f32> {
+    let mut scene = stand();
+    scene
+        .trees
+        .retain(|t| (t.position.x / 7.0).floor() as i32 % 2 == 0);
+    scene.sky.ground_occlusion = cover;
+    scene.camera = Camera {
+        position: Vec3::new(300.0, 200.0, 299.0),
+        look_at: Vec3::new(300.0, 0.0, 300.0),
+        fov_deg: 20.0,
+    };
+    let options = RenderOptions {
+        width: 64,
+        height: 64,
+        technique: "shadermap".into(),
+        settings: settings(),
+        shadows: false,
+        cache: CachePolicy::Off,
+        debug: sylvan_render::DebugView::Coverage,
+        ..Default::default()
+    };
+    let plants = vec![common::test_tree()];
+    let mut r = Renderer::new(gpu, &scene, &plants, &options).expect("renderer");
+    r.render(gpu, &scene.camera, &scene.sun).expect("frame");
+    (0..16)
+        .map(|i| r.radiance_mean(gpu, [4 * i, 16, 4, 32]).expect("radiance")[0])
+        .collect()
+}
+
+#[test]
+fn the_fields_trees_lie_where_the_crowns_are() {
+    // BN12 §4 and §7 ("Γ/A replacing Λ"), mean-preserving (the tree share × Γ/Γ̄): over every
+    // other column of trees (14 m apart — finer than the density raster's 25 m cells, so the
+    // field of the density alone is nearly even across them, and than Γ̄'s ±32 m support) the
+    // field's covered share follows the crowns' cover from above (`world/cover.rs`, read at the
+    // pixel's footprint), and its mean is the density's. Negative control: with the ground cover off
+    // (`[sky] ground_occlusion = false`) the share is even.
+    let gpu = gpu();
+    let (with, without) = (banded_columns(&gpu, true), banded_columns(&gpu, false));
+    let spread = |v: &[f32]| {
+        let (lo, hi) = v
+            .iter()
+            .fold((f32::MAX, f32::MIN), |(a, b), &x| (a.min(x), b.max(x)));
+        hi - lo
+    };
+    let mean = |v: &[f32]| v.iter().sum::<f32>() / v.len() as f32;
+    eprintln!("covered per column band, with the cover {with:.3?}, without {without:.3?}");
+    assert!(
+        spread(&without) < 0.1,
+        "the density alone is nearly even across the bands: {without:?}"
+    );
+    assert!(
+        spread(&with) > 0.3,
+        "the field's trees must follow the bands: {with:?}"
+    );
+    assert!(
+        (mean(&with) - mean(&without)).abs() <= 0.1 * mean(&without),
+        "the mean share stays the density's: {} vs {}",
+        mean(&with),
+        mean(&without)
+    );
+}

@@ -30,6 +30,8 @@ struct Frame {
     // x trees per m² where no cover tile is held; y mean tree height (m); z distance where
     // trees end (m); w the stored density's top (trees per m²).
     cover_extra: vec4<f32>,
+    // x the cover's texel side (m); y its mip levels (down to a texel a tile).
+    cover_lod: vec4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -180,6 +182,21 @@ fn ground_cover(xz: vec2<f32>) -> vec4<f32> {
     }
     let t = textureSampleLevel(cover_atlas, cover_sampler, xz / (frame.cover.x * frame.cover.y), 0.0);
     return vec4<f32>(t.r, t.g, t.b * t.b * frame.cover_extra.w, t.a);
+}
+
+// The cover's Γ (x) and Γ̄ (y) at ground point `xz`, filtered over `footprint` metres (the
+// atlas's mip at that size: BN12 §4's quadtree of coverage below the world's tile), and z how
+// much of the detail the coarsest level still keeps (0 there: its texel is a whole tile); w −1
+// where no tile is held.
+fn ground_cover_filtered(xz: vec2<f32>, footprint: f32) -> vec4<f32> {
+    let c = ground_cover(xz);
+    if (c.w < 0.0) {
+        return vec4<f32>(0.0, 0.0, 0.0, -1.0);
+    }
+    let top = frame.cover_lod.y - 1.0;
+    let lod = clamp(log2(max(footprint, 1e-6) / frame.cover_lod.x), 0.0, top);
+    let t = textureSampleLevel(cover_atlas, cover_sampler, xz / (frame.cover.x * frame.cover.y), lod);
+    return vec4<f32>(t.r, t.g, clamp(top - lod, 0.0, 1.0), 1.0);
 }
 
 // Fades the ground cover's effect out where trees end (`[world] tree_distance_m`, over its

@@ -1,6 +1,8 @@
-//! The ground cover: BN12 §4's coverage tiles at one level, with §5's density map, made per
-//! world tile from the same trees the tiles draw, for BN12's ground lighting (eq. 10–12) and the
-//! sky on the trees (eq. 9).
+//! The ground cover: BN12 §4's coverage tiles at one level and its mips, with §5's density map,
+//! made per world tile from the same trees the tiles draw, for BN12's ground lighting (eq.
+//! 10–12), the sky on the trees (eq. 9) and the forest field's coverage (`field.wgsl`'s
+//! `forest_terms_covered`, read at the mip of the pixel's footprint: the quadtree below the
+//! world's tile, [`CoverLayout::levels`]).
 //!
 //! Per tile a `G × G` grid (`G` = tile / [`TEXEL_M`], so about 2 m texels) holds, in RGBA8:
 //! - **Γ**: the share of the texel covered by tree crowns seen from above — one disk per tree,
@@ -79,12 +81,40 @@ impl CoverLayout {
     pub fn texel_m(&self) -> f32 {
         self.tile_m / self.texels as f32
     }
+
+    /// Mip levels of a tile (level 0 included): halvings while the side stays whole, at most
+    /// down to one texel a tile — the quadtree of BN12 §4's coverage tiles below the world's
+    /// tile; coarser, the field's density raster.
+    pub fn levels(&self) -> u32 {
+        self.texels.trailing_zeros().min(self.texels.ilog2()) + 1
+    }
 }
 
-/// One tile's cover, as uploaded (`texels²` RGBA8, row-major, row 0 at the tile's low Z).
+/// The 2 × 2 means of a `side²` RGBA8 grid (side even).
+fn halve(src: &[[u8; 4]], side: usize) -> Vec<[u8; 4]> {
+    let h = side / 2;
+    let mut out = Vec::with_capacity(h * h);
+    for z in 0..h {
+        for x in 0..h {
+            let at = |dx: usize, dz: usize| src[(2 * z + dz) * side + 2 * x + dx];
+            out.push(std::array::from_fn(|c| {
+                let sum: u32 = [at(0, 0), at(1, 0), at(0, 1), at(1, 1)]
+                    .iter()
+                    .map(|t| t[c] as u32)
+                    .sum();
+                ((sum + 2) / 4) as u8
+            }));
+        }
+    }
+    out
+}
+
+/// One tile's cover, as uploaded (`texels²` RGBA8, row-major, row 0 at the tile's low Z), and
+/// its mip levels (each the 2 × 2 means of the one before, down to [`CoverLayout::levels`]).
 pub(crate) struct CoverTile {
     pub key: TileKey,
     pub texels: Vec<[u8; 4]>,
+    pub mips: Vec<Vec<[u8; 4]>>,
 }
 
 impl Produced for CoverTile {
@@ -183,7 +213,14 @@ pub(crate) fn produce(source: &Source, layout: &CoverLayout, key: TileKey) -> Co
             ]);
         }
     }
-    CoverTile { key, texels }
+    let mut mips: Vec<Vec<[u8; 4]>> = Vec::new();
+    let mut side = g;
+    for _ in 1..layout.levels() {
+        let next = halve(mips.last().unwrap_or(&texels), side);
+        side /= 2;
+        mips.push(next);
+    }
+    CoverTile { key, texels, mips }
 }
 
 fn unorm8(v: f32) -> u8 {
@@ -228,7 +265,7 @@ pub struct GroundCover {
     filled: Vec<Option<TileKey>>,
     producer: Option<Producer<CoverTile>>,
     /// The uniforms `frame.cover` and `frame.cover_extra` (see `frame.wgsl`).
-    uniforms: [[f32; 4]; 2],
+    uniforms: [[f32; 4]; 3],
     produced: u32,
     /// Tiles are waited for up to here from the eye, metres.
     reach_m: f32,
@@ -287,14 +324,16 @@ impl GroundCover {
         } else {
             1
         };
-        let texture = texture_2d(gpu, "ground_cover", side, COVER_FORMAT);
-        let tags = texture_2d(gpu, "ground_cover_tags", cells, TAG_FORMAT);
+        let levels = if settings.enabled { layout.levels() } else { 1 };
+        let texture = texture_2d(gpu, "ground_cover", side, COVER_FORMAT, levels);
+        let tags = texture_2d(gpu, "ground_cover_tags", cells, TAG_FORMAT, 1);
         let sampler = gpu.device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("ground_cover_sampler"),
             address_mode_u: wgpu::AddressMode::Repeat,
             address_mode_v: wgpu::AddressMode::Repeat,
             mag_filter: wgpu::FilterMode::Linear,
             min_filter: wgpu::FilterMode::Linear,
+            mipmap_filter: wgpu::MipmapFilterMode::Linear,
             ..Default::default()
         });
         let producer = settings.enabled.then(|| {
@@ -327,6 +366,7 @@ impl GroundCover {
                     end,
                     LAMBDA_MAX,
                 ],
+                [layout.texel_m(), levels as f32, 0.0, 0.0],
             ],
             layout,
             cells,
@@ -354,15 +394,18 @@ impl GroundCover {
         &self.sampler
     }
 
-    /// `frame.cover` and `frame.cover_extra`.
-    pub(crate) fn uniforms(&self) -> [[f32; 4]; 2] {
+    /// `frame.cover`, `frame.cover_extra` and `frame.cover_lod`.
+    pub(crate) fn uniforms(&self) -> [[f32; 4]; 3] {
         self.uniforms
     }
 
     /// GPU bytes held.
     pub fn bytes(&self) -> u64 {
         let s = self.texture.size();
-        (s.width as u64 * s.height as u64 + (self.cells as u64).pow(2)) * 4
+        let texels: u64 = (0..self.texture.mip_level_count())
+            .map(|l| (s.width as u64 >> l) * (s.height as u64 >> l))
+            .sum();
+        (texels + (self.cells as u64).pow(2)) * 4
     }
 
     /// Tiles produced so far, GPU bytes, atlas cells and texels per tile side, and the CPU
@@ -468,32 +511,38 @@ impl GroundCover {
 
     fn upload(&mut self, gpu: &Gpu, tile: &CoverTile) {
         let n = self.cells as i32;
-        let g = self.layout.texels;
         let c = cell(tile.key, n);
         let (cx, cz) = ((c % n as usize) as u32, (c / n as usize) as u32);
-        gpu.queue.write_texture(
-            wgpu::TexelCopyTextureInfo {
-                texture: &self.texture,
-                mip_level: 0,
-                origin: wgpu::Origin3d {
-                    x: cx * g,
-                    y: cz * g,
-                    z: 0,
+        let levels = std::iter::once(&tile.texels).chain(&tile.mips);
+        for (level, texels) in levels
+            .enumerate()
+            .take(self.texture.mip_level_count() as usize)
+        {
+            let g = self.layout.texels >> level;
+            gpu.queue.write_texture(
+                wgpu::TexelCopyTextureInfo {
+                    texture: &self.texture,
+                    mip_level: level as u32,
+                    origin: wgpu::Origin3d {
+                        x: cx * g,
+                        y: cz * g,
+                        z: 0,
+                    },
+                    aspect: wgpu::TextureAspect::All,
                 },
-                aspect: wgpu::TextureAspect::All,
-            },
-            bytemuck::cast_slice(&tile.texels),
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(g * 4),
-                rows_per_image: Some(g),
-            },
-            wgpu::Extent3d {
-                width: g,
-                height: g,
-                depth_or_array_layers: 1,
-            },
-        );
+                bytemuck::cast_slice(texels),
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(g * 4),
+                    rows_per_image: Some(g),
+                },
+                wgpu::Extent3d {
+                    width: g,
+                    height: g,
+                    depth_or_array_layers: 1,
+                },
+            );
+        }
         let tag = tile.key.x as u32 + tile.key.z as u32 * 65536 + 1;
         gpu.queue.write_texture(
             wgpu::TexelCopyTextureInfo {
@@ -523,7 +572,13 @@ fn cell(key: TileKey, n: i32) -> usize {
     (key.z.rem_euclid(n) * n + key.x.rem_euclid(n)) as usize
 }
 
-fn texture_2d(gpu: &Gpu, label: &str, side: u32, format: wgpu::TextureFormat) -> wgpu::Texture {
+fn texture_2d(
+    gpu: &Gpu,
+    label: &str,
+    side: u32,
+    format: wgpu::TextureFormat,
+    levels: u32,
+) -> wgpu::Texture {
     gpu.device.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
         size: wgpu::Extent3d {
@@ -531,7 +586,7 @@ fn texture_2d(gpu: &Gpu, label: &str, side: u32, format: wgpu::TextureFormat) ->
             height: side,
             depth_or_array_layers: 1,
         },
-        mip_level_count: 1,
+        mip_level_count: levels,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
         format,
@@ -543,6 +598,36 @@ fn texture_2d(gpu: &Gpu, label: &str, side: u32, format: wgpu::TextureFormat) ->
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn mips_halve_to_a_texel_a_tile_and_keep_the_mean() {
+        let layout = CoverLayout::new(256.0, 5.0);
+        assert_eq!(layout.texels, 128);
+        assert_eq!(layout.levels(), 8);
+        assert_eq!(
+            CoverLayout::new(200.0, 5.0).levels(),
+            3,
+            "100 texels: 100, 50, 25"
+        );
+        let side = 8;
+        let grid: Vec<[u8; 4]> = (0..side * side)
+            .map(|i| [(i * 4) as u8, if i % 2 == 0 { 255 } else { 0 }, 7, 9])
+            .collect();
+        let half = halve(&grid, side);
+        assert_eq!(half.len(), 16);
+        let mean =
+            |g: &[[u8; 4]], c: usize| g.iter().map(|t| t[c] as f32).sum::<f32>() / g.len() as f32;
+        for c in 0..4 {
+            assert!(
+                (mean(&half, c) - mean(&grid, c)).abs() <= 0.5,
+                "channel {c}"
+            );
+        }
+        assert_eq!(
+            half[0][1], 128,
+            "a 2 × 2 of 255 and 0 averages to its middle"
+        );
+    }
 
     #[test]
     fn box_filter_keeps_the_mean_and_spreads_a_spike() {

@@ -37,8 +37,26 @@ fn forest_radiance(xz: vec2<f32>, n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, grou
     let ig = mix(sun_g, sun_mean, h.x);
     let jg = sky_g * t.ground_sky * mix(contrast, 1.0, h.x);
     let trees = forest_trees(t, field_tree_albedo(xz), v, l, vis_mean);
-    let mu = field_tree_share(t, h.y);
+    let mu = min(field_tree_share(t, h.y) * field_cover_gain(xz, v, n, s), 1.0);
     return (1.0 - mu) * (ig + jg) + mu * trees;
+}
+
+// BN12 §4 and §7's "Γ/A replacing Λ", mean-preserving: the field's tree share μ is scaled by
+// g = Γ/Γ̄, Γ the crowns' cover from above (the ground cover's disks, `world/cover.rs`) filtered
+// over the pixel's footprint on the ground and Γ̄ its local mean — so the field's trees lie
+// where the trees are (a tree fading out leaves its share under its own crown), g averages to
+// 1 over Γ̄'s support, and μ g still starts from 0 as the drawn trees start fading. Where the
+// footprint reaches a tile per texel, no tile is held, or trees end, g = 1 (the field of the
+// density alone).
+fn field_cover_gain(xz: vec2<f32>, v: vec3<f32>, n: vec3<f32>, s: f32) -> f32 {
+    let footprint = s / (frame.shadow_params.w * max(abs(dot(v, n)), 0.05));
+    let c = ground_cover_filtered(xz, footprint);
+    if (c.w < 0.0 || c.y <= 1e-3) {
+        return 1.0;
+    }
+    // Where trees end the cover does (`ground_cover_weight`, by the distance `s`).
+    let end = frame.cover_extra.z;
+    return mix(1.0, c.x / c.y, c.z * (1.0 - smoothstep(end * 0.9, end, s)));
 }
 
 // Eq. 27's μ, mean-preserving: the share of a pixel the field gives to trees when the drawn
@@ -57,7 +75,8 @@ fn fs_terrain_forest(in: TerrainOut) -> @location(0) vec4<f32> {
     let vis = select(sun_visibility(in.world, n * 0.15), 0.0, dot(n, l) <= 0.0);
     let s = distance(frame.camera.xyz, in.world);
     if (debug_mode() == DEBUG_COVERAGE) {
-        let share = field_tree_share(forest_terms(in.world.xz, v, l, n), field_handover_at(in.world.xz, s, dot(v, n)).y);
+        let t = forest_terms(in.world.xz, v, l, n);
+        let share = min(field_tree_share(t, field_handover_at(in.world.xz, s, dot(v, n)).y) * field_cover_gain(in.world.xz, v, n, s), 1.0);
         return vec4<f32>(target_output(vec3<f32>(share)), 1.0);
     }
     let lit = forest_radiance(in.world.xz, n, v, l, ground, vis, s, ground_contrast(in.world));

@@ -46,8 +46,14 @@
 //! local trees' crown areas, so the one mix table is looked up at the density of mix trees
 //! that covers the view as the local species do.
 //!
-//! **Not built yet**: ℂ and quadtree coverage tiles (the ground cover, `world::cover`, is one
-//! level, near the eye; the field's far ground uses the density raster's Λ_h).
+//! **Coverage** (§4, §7's "Γ/A replacing Λ"): the fractions of ground seen are scaled by
+//! m = (1 − Γ)/(1 − Γ̄), the ground cover's crowns from above (`world::cover`) at the mip of the
+//! pixel's footprint and their local mean — mean-preserving (a deviation: BN12 replaces Λ by
+//! Γ/A with G(·,·,·,1/A) = 0, which changes the mean where disks are resolved), so the field's
+//! trees lie where the trees are and a tree fading out leaves its share under its own crown.
+//!
+//! **Not built yet**: ℂ, and coverage beyond the ground cover's window (one level and its mips,
+//! within the trees' distance; farther the field uses the density raster's Λ_h alone).
 //!
 //! **Deviations from BN12**, each stated:
 //! - The patch is drawn unscaled and each table direction `v′` of the transformed space
