@@ -1,7 +1,7 @@
 //! The ground cover: BN12 §4's coverage tiles at one level and its mips, with §5's density map,
 //! made per world tile from the same trees the tiles draw, for BN12's ground lighting (eq.
 //! 10–12), the sky on the trees (eq. 9) and the forest field's coverage (`field.wgsl`'s
-//! `forest_terms_covered`, read at the mip of the pixel's footprint: the quadtree below the
+//! `field_cover_gain`, read at the mip of the pixel's footprint: the quadtree below the
 //! world's tile, `CoverLayout::levels`).
 //!
 //! Per tile a `G × G` grid (`G` = tile / [`TEXEL_M`], so about 2 m texels) holds, in RGBA8:
