@@ -420,15 +420,16 @@ impl Renderer {
             .chain(&options.settings)
             .cloned()
             .collect();
-        // The cascades' translucent layer, where a `zfield` (alone or a band) casts soft shadows.
+        // The cascades' translucent layer, where a technique (alone or a band) casts soft
+        // shadows (`Entry::casts_translucent`).
         let members = match entry.kind {
             registry::Kind::Chain => crate::technique::lod::members(scene, &options.settings)?,
             _ => vec![(entry.name, settings.clone())],
         };
         let mut translucent = false;
         for (name, s) in &members {
-            if *name == crate::technique::zfield::ENTRY.name {
-                translucent |= crate::technique::zfield::casts_translucent(s)?;
+            if let Some(casts) = registry::find(name)?.casts_translucent {
+                translucent |= casts(s)?;
             }
         }
         let texel = crate::frame::shadow_texel_bytes(translucent);

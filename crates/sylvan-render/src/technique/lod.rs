@@ -291,6 +291,7 @@ pub const ENTRY: Entry = Entry {
     check: |s| params::resolve::<NoParams, NoParams>("auto", s).map(|_| ()),
     build: |cx| Chain::build(cx),
     bake: None,
+    casts_translucent: None,
     shaders: Vec::new,
 };
 

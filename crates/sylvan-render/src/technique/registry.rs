@@ -79,9 +79,16 @@ pub struct Entry {
     pub build: fn(&mut BuildContext<'_>) -> Result<Built, RenderError>,
     /// Bakes one plant (`None`: nothing to bake).
     pub bake: Option<fn(BakeJob<'_>) -> Result<BakeSummary, RenderError>>,
+    /// Whether it casts translucent shadows with these settings (the scene's and the command
+    /// line's, every technique's): the renderer then gives the cascades their translucent
+    /// layer (BN12 §5's soft shadows, `PassKind::ShadowTranslucent`); `None`: it never does.
+    pub casts_translucent: Option<SettingsPredicate>,
     /// Its WGSL modules as compiled (frame bindings prepended), by label, for naga tests.
     pub shaders: fn() -> Vec<(&'static str, String)>,
 }
+
+/// A question about a technique answered from its settings alone (no GPU).
+pub type SettingsPredicate = fn(&[Setting]) -> Result<bool, RenderError>;
 
 /// Every technique, in `--technique` order. A technique's shader-visible id is its index.
 pub static REGISTRY: &[Entry] = &[

@@ -300,6 +300,7 @@ pub const ENTRY: Entry = Entry {
         })
     },
     bake: Some(registry::bake_with::<BillboardCloudBake, BillboardCloudDrawParams>),
+    casts_translucent: None,
     shaders: || vec![("billboard-cloud", shader_source())],
 };
 

@@ -257,6 +257,7 @@ pub const ENTRY: Entry = Entry {
         })
     },
     bake: Some(registry::bake_with::<BoxTreeBake, BoxTreeDrawParams>),
+    casts_translucent: None,
     shaders: || {
         vec![
             ("boxtree", shader_source()),

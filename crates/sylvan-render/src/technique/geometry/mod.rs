@@ -390,6 +390,7 @@ pub const ENTRY: Entry = Entry {
         })
     },
     bake: None,
+    casts_translucent: None,
     shaders: || vec![("geometry", shader_source())],
 };
 

@@ -37,6 +37,7 @@ pub const ENTRY: Entry = Entry {
         })
     },
     bake: Some(registry::bake_with::<HbtBake, HbtDrawParams>),
+    casts_translucent: None,
     shaders: || {
         vec![
             ("hbt", super::shader_source()),

@@ -241,6 +241,7 @@ pub const ENTRY: Entry = Entry {
         })
     },
     bake: Some(registry::bake_with::<OctahedralBake, OctahedralDrawParams>),
+    casts_translucent: None,
     shaders: || vec![("octahedral", shader_source())],
 };
 

@@ -340,6 +340,7 @@ pub const ENTRY: super::registry::Entry = super::registry::Entry {
         })
     },
     bake: None,
+    casts_translucent: None,
     shaders: || {
         vec![
             ("shadermap_terrain", field::terrain_source()),

@@ -429,6 +429,7 @@ pub const ENTRY: Entry = Entry {
         })
     },
     bake: Some(registry::bake_with::<ZFieldBake, ZFieldDrawParams>),
+    casts_translucent: Some(casts_translucent),
     shaders: || {
         vec![
             ("zfield", shader_source()),
