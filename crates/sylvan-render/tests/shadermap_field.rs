@@ -578,6 +578,20 @@ fn a_tree_is_left_to_the_field_where_it_is_handover_px_tall() {
 
 #[test]
 fn the_field_takes_each_species_share_from_its_own_end() {
+    species_share_from_its_own_end(1);
+}
+
+#[test]
+fn the_field_weighs_the_fourteenth_species_too() {
+    // The same with the short trees as species 13 of 14: their weights are in the density
+    // raster's sixth layer — a square texture of 6 layers, which wgpu's GL backend would make
+    // a cube map sampled black (the field then pads it to 7).
+    species_share_from_its_own_end(13);
+}
+
+/// [`the_field_takes_each_species_share_from_its_own_end`] with the short trees as species
+/// `short` (the species before it present, without trees).
+fn species_share_from_its_own_end(short: u32) {
     // A stand of 10 m trees and 6 m ones (the same plant, species 1) mixed at random, seen
     // 400 m away, the field's start far beyond: with the pixel rule set so the short trees end
     // at 320 m (`handover_px` ≈ 6.9 at this view) they are gone, and the field must cover the
@@ -585,15 +599,17 @@ fn the_field_takes_each_species_share_from_its_own_end() {
     // area. The covered fraction (`--debug coverage`) stays within a third of what removing the
     // short trees costs (the negative control: the field taking nothing for them), and is
     // continuous where they start fading and where they end (under 1 % a step of 2 %).
-    let cache = temp_cache("species-ends");
+    let cache = temp_cache(&format!("species-ends-{short}"));
     let mut scene = stand();
     for (i, t) in scene.trees.iter_mut().enumerate() {
         if (i * 2_654_435_761) % 1000 < 500 {
-            t.species = 1;
+            t.species = short;
             t.height = 6.0;
         }
     }
-    scene.species.push(scene.species[0].clone());
+    while scene.species.len() <= short as usize {
+        scene.species.push(scene.species[0].clone());
+    }
     // Wide enough for a few dozen trees in the measured half of the frame.
     let fov = 10.0;
     let d = 400.0;
