@@ -474,13 +474,8 @@ fn the_handover_to_the_field_is_continuous() {
     );
 }
 
-#[test]
-fn zfield_trees_fade_linearly_into_the_field() {
-    // BN12 §7 (plan test 12f): a tree (its trunk base) at 0.9 s_max covers (1 − smoothstep(0.8, 1, 0.9)) = ½ of
-    // what it covers nearer, in linear radiance against the bare ground, from one camera (the
-    // chain's s_max moves). The field's density is 0 and ν is forced to 0, so neither the
-    // ground nor the tree's lighting changes; no shadows.
-    let cache = temp_cache("fade");
+/// One 10 m tree, and a camera 100 m from it at 70° from the zenith, `fov_deg` wide.
+fn lone_tree(fov_deg: f32) -> ([TreeInstance; 1], Camera) {
     let tree = [TreeInstance {
         position: Vec3::new(300.0, 0.0, 300.0),
         species: 0,
@@ -488,14 +483,15 @@ fn zfield_trees_fade_linearly_into_the_field() {
         height: 10.0,
         rotation: 0.0,
     }];
-    let camera = camera_at(Vec3::new(300.0, 5.0, 300.0), 70.0, 100.0, 5.0);
-    // The fade goes by the tree's own distance (its trunk base), as the chain's bands do.
-    let d = camera.position.distance(tree[0].position);
-    let extra = ["shadermap.density_scale=0", "shadermap.nu=0"];
-    let at = |k: f32| chain_radiance(d / k, Some(&tree), &camera, &extra, false, &cache);
-    let (near, faded, gone) = (at(0.5), at(0.9), at(1.2));
-    let _ = std::fs::remove_dir_all(&cache);
-    // The channel where the tree differs most from the ground.
+    (
+        tree,
+        camera_at(Vec3::new(300.0, 5.0, 300.0), 70.0, 100.0, fov_deg),
+    )
+}
+
+/// The channel where the tree (`near`) differs most from the bare ground (`gone`), and the
+/// share of that difference `v` keeps: its coverage against the ground, in linear radiance.
+fn coverage_share(near: [f32; 3], gone: [f32; 3]) -> (usize, impl Fn([f32; 3]) -> f32) {
     let c = (0..3)
         .max_by(|&a, &b| {
             (near[a] - gone[a])
@@ -503,7 +499,25 @@ fn zfield_trees_fade_linearly_into_the_field() {
                 .total_cmp(&(near[b] - gone[b]).abs())
         })
         .unwrap();
-    let share = (faded[c] - gone[c]) / (near[c] - gone[c]);
+    (c, move |v: [f32; 3]| (v[c] - gone[c]) / (near[c] - gone[c]))
+}
+
+#[test]
+fn zfield_trees_fade_linearly_into_the_field() {
+    // BN12 §7 (plan test 12f): a tree (its trunk base) at 0.9 s_max covers (1 − smoothstep(0.8, 1, 0.9)) = ½ of
+    // what it covers nearer, in linear radiance against the bare ground, from one camera (the
+    // chain's s_max moves). The field's density is 0 and ν is forced to 0, so neither the
+    // ground nor the tree's lighting changes; no shadows.
+    let cache = temp_cache("fade");
+    let (tree, camera) = lone_tree(5.0);
+    // The fade goes by the tree's own distance (its trunk base), as the chain's bands do.
+    let d = camera.position.distance(tree[0].position);
+    let extra = ["shadermap.density_scale=0", "shadermap.nu=0"];
+    let at = |k: f32| chain_radiance(d / k, Some(&tree), &camera, &extra, false, &cache);
+    let (near, faded, gone) = (at(0.5), at(0.9), at(1.2));
+    let _ = std::fs::remove_dir_all(&cache);
+    let (c, share_of) = coverage_share(near, gone);
+    let share = share_of(faded);
     eprintln!("near {near:?}, at 0.9 s_max {faded:?}, beyond {gone:?}: coverage share {share:.4}");
     assert!(
         (near[c] - gone[c]).abs() > 0.2 * gone[c],
@@ -523,15 +537,8 @@ fn a_tree_is_left_to_the_field_where_it_is_handover_px_tall() {
     // is forced to 0, as in the test above). With `handover_px = 0` (the negative control) it is
     // drawn whole wherever the pixel rule would have dropped it.
     let cache = temp_cache("pixel-rule");
-    let tree = [TreeInstance {
-        position: Vec3::new(300.0, 0.0, 300.0),
-        species: 0,
-        seed: 0,
-        height: 10.0,
-        rotation: 0.0,
-    }];
     let fov = 5.0;
-    let camera = camera_at(Vec3::new(300.0, 5.0, 300.0), 70.0, 100.0, fov);
+    let (tree, camera) = lone_tree(fov);
     let d = camera.position.distance(tree[0].position);
     let s_max = 4.0 * d;
     // The tree ends at 10 m × ppm / px: at d / k for px = 10 ppm k / d.
@@ -547,14 +554,7 @@ fn a_tree_is_left_to_the_field_where_it_is_handover_px_tall() {
     };
     let (near, faded, gone, off) = (at(px(0.5)), at(px(0.9)), at(px(1.2)), at(0.0));
     let _ = std::fs::remove_dir_all(&cache);
-    let c = (0..3)
-        .max_by(|&a, &b| {
-            (near[a] - gone[a])
-                .abs()
-                .total_cmp(&(near[b] - gone[b]).abs())
-        })
-        .unwrap();
-    let share = |v: [f32; 3]| (v[c] - gone[c]) / (near[c] - gone[c]);
+    let (c, share) = coverage_share(near, gone);
     eprintln!(
         "near {near:?}, at 0.9 of its end {faded:?}, beyond {gone:?}, no pixel rule {off:?}: shares {:.4} / {:.4}",
         share(faded),

@@ -68,16 +68,32 @@ fn frame_with(
     seeds: sylvan_render::Seeds,
 ) -> (image::RgbImage, sylvan_render::FrameStats) {
     let options = RenderOptions {
+        seeds,
+        cache: sylvan_render::bake::CachePolicy::Off,
+        ..frame_options(technique, cpu_driven)
+    };
+    frame_of(gpu, s, &options)
+}
+
+/// The options of [`frame`]: 128², 512² shadow maps.
+fn frame_options(technique: &str, cpu_driven: bool) -> RenderOptions {
+    RenderOptions {
         width: 128,
         height: 128,
         shadow_resolution: 512,
         cpu_driven,
-        seeds,
         technique: technique.into(),
-        cache: sylvan_render::bake::CachePolicy::Off,
         ..Default::default()
-    };
-    let mut r = Renderer::new(gpu, s, &[test_tree()], &options).expect("renderer");
+    }
+}
+
+/// One frame of `s` (its species drawn with the test tree) with `options`: picture and stats.
+fn frame_of(
+    gpu: &sylvan_gpu::Gpu,
+    s: &sylvan_scene::Scene,
+    options: &RenderOptions,
+) -> (image::RgbImage, sylvan_render::FrameStats) {
+    let mut r = Renderer::new(gpu, s, &[test_tree()], options).expect("renderer");
     let stats = r.render(gpu, &s.camera, &s.sun).expect("frame");
     let img = image::DynamicImage::ImageRgba8(r.read_image(gpu).unwrap()).into_rgb8();
     (img, stats)
@@ -647,19 +663,11 @@ fn the_pixel_rule_drops_the_same_trees_on_the_cpu_and_the_gpu() {
         .map(|a| sylvan_scene::Setting::from_arg(a).unwrap())
         .collect();
         let options = RenderOptions {
-            width: 128,
-            height: 128,
-            shadow_resolution: 512,
-            cpu_driven,
-            technique: "auto".into(),
             settings,
             cache: sylvan_render::bake::CachePolicy::Dir(cache.clone()),
-            ..Default::default()
+            ..frame_options("auto", cpu_driven)
         };
-        let mut r = Renderer::new(&gpu, &s, &[test_tree()], &options).expect("renderer");
-        let stats = r.render(&gpu, &s.camera, &s.sun).expect("frame");
-        let img = image::DynamicImage::ImageRgba8(r.read_image(&gpu).unwrap()).into_rgb8();
-        (img, stats)
+        frame_of(&gpu, &s, &options)
     };
     // 128 px at 60°: 111 px per metre, so at 8 px the 8–12 m trees end at 111–166 m.
     let (cpu, cpu_stats) = frame(true, 8.0);

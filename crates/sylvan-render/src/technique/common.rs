@@ -229,16 +229,11 @@ impl TileAtlas {
             }));
         }
         let mips = tile.ilog2() + 1;
-        // wgpu's GL backend picks the GL target from the size: one layer makes a GL_TEXTURE_2D
-        // and a square multiple of 6 layers a cube map, which a `texture_2d_array` binding then
-        // samples as incomplete (black, opaque). Give GL at least two layers, never 6k.
-        let mut allocated = layers;
-        if gl {
-            allocated = allocated.max(2);
-            if allocated.is_multiple_of(6) && per_row == rows {
-                allocated += 1;
-            }
-        }
+        let allocated = if gl {
+            gl_array_layers(layers, per_row == rows)
+        } else {
+            layers
+        };
         let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
             label: Some(label),
             size: wgpu::Extent3d {
@@ -496,4 +491,17 @@ pub(crate) fn parked_lists(
             records as u64 * out,
         ),
     )
+}
+
+/// The layers to allocate for a `texture_2d_array` of `layers` that wgpu's GL backend can
+/// sample: it picks the GL target from the size — one layer makes a GL_TEXTURE_2D and a square
+/// (`square`: width = height) multiple of 6 layers a cube map, which the array binding then
+/// samples as incomplete (black, opaque) — so at least two, never a square 6k.
+pub(crate) fn gl_array_layers(layers: u32, square: bool) -> u32 {
+    let n = layers.max(2);
+    if square && n.is_multiple_of(6) {
+        n + 1
+    } else {
+        n
+    }
 }

@@ -128,13 +128,13 @@ impl ForestField {
             }));
         }
         let [w, h] = density.resolution;
-        let mut layers = 2 + n_species.div_ceil(4) as u32;
-        if w == h && layers.is_multiple_of(6) {
-            // wgpu's GL backend makes a square texture of 6k layers a cube map, sampled black
-            // through a `texture_2d_array` (DESIGN.md, GL): one empty layer more.
-            layers += 1;
-            bits.extend(std::iter::repeat_n(0u16, (w * h * 4) as usize));
-        }
+        let used = 2 + n_species.div_ceil(4) as u32;
+        // Empty layers where wgpu's GL backend would not sample the array (DESIGN.md, GL).
+        let layers = crate::technique::common::gl_array_layers(used, w == h);
+        bits.extend(std::iter::repeat_n(
+            0u16,
+            ((layers - used) * w * h * 4) as usize,
+        ));
         let raster = crate::texture::upload_raw(
             gpu,
             "shadermap_density",
